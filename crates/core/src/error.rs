@@ -1,0 +1,86 @@
+//! Typed errors. Every message names the bad value and what is allowed.
+
+use thiserror::Error;
+
+/// An option of [`crate::Config`] outside its allowed range, or an unknown option.
+#[derive(Clone, Debug, PartialEq, Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// A known option with a value outside its range.
+    #[error("invalid value {value} for option `{option}`: allowed {allowed}")]
+    OutOfRange {
+        /// The option's name as in SPEC.md (`lives`, `alien_prob`, …).
+        option: &'static str,
+        /// The rejected value, as given.
+        value: String,
+        /// The allowed range or set, in words.
+        allowed: &'static str,
+    },
+    /// An option name that does not exist.
+    #[error("unknown option `{name}`: allowed options are {}", crate::config::OPTION_NAMES.join(", "))]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+}
+
+/// Why a snapshot could not be decoded or restored.
+#[derive(Clone, Debug, PartialEq, Error)]
+#[non_exhaustive]
+pub enum SnapshotError {
+    /// The bytes do not start with the ChopperScape snapshot magic.
+    #[error("not a ChopperScape snapshot (the bytes do not start with \"CSNP\")")]
+    NotASnapshot,
+    /// A snapshot written by another format version.
+    #[error("snapshot format version {found} is not supported: this build reads version {supported}")]
+    Version {
+        /// Version in the bytes.
+        found: u16,
+        /// Version this build reads and writes.
+        supported: u16,
+    },
+    /// The bytes end before the snapshot does.
+    #[error("snapshot is truncated: it ends before its {0}")]
+    Truncated(&'static str),
+    /// A field holds a value no valid state can have.
+    #[error("snapshot is corrupted: {0}")]
+    Corrupted(String),
+    /// The snapshot was taken from an environment with other options.
+    #[error("snapshot was taken with other options than this environment's: {0}")]
+    ConfigMismatch(String),
+}
+
+/// Everything the environment can refuse.
+#[derive(Clone, Debug, PartialEq, Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// An action outside `Discrete(5)`.
+    #[error(
+        "invalid action {0}: allowed actions are 0..=4 (0 Right, 1 Left, 2 Down, 3 Up, 4 Do Nothing)"
+    )]
+    InvalidAction(i64),
+    /// `step` before any `reset`.
+    #[error("step called before reset: call reset() first")]
+    NotReset,
+    /// `step` after the episode terminated or was truncated.
+    #[error("step called after the episode ended ({0}): call reset() to start a new episode")]
+    EpisodeOver(&'static str),
+    /// A caller-owned buffer of the wrong length or element type.
+    #[error("observation buffer has {got} elements of {got_dtype}: this environment writes {expected} elements of {expected_dtype}")]
+    BufferSize {
+        /// Elements the observation needs.
+        expected: usize,
+        /// Element type the observation needs.
+        expected_dtype: &'static str,
+        /// Elements given.
+        got: usize,
+        /// Element type given.
+        got_dtype: &'static str,
+    },
+    /// An invalid option.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A snapshot that cannot be read or restored.
+    #[error(transparent)]
+    Snapshot(#[from] SnapshotError),
+}

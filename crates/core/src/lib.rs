@@ -1,0 +1,58 @@
+//! ChopperScape-v0: a helicopter flies through the sky; birds come from the right and end the episode on
+//! contact; fuel tanks rise from the bottom and refill the tank; every step is worth +1; fuel runs out after
+//! 1000 steps. This crate is the game itself, exactly as `SPEC.md` states it, and nothing else: no threads,
+//! I/O, windows or Python, so it builds for `wasm32-unknown-unknown` unchanged.
+//!
+//! # How the types relate
+//! - [`Config`] holds every option (the v0 rules by default); it is validated once.
+//! - [`Game`] is the rules: a [`World`] (every entity, fuel, score, lives), the env's own generator
+//!   ([`Rng`]), and `reset` / `step` that change the world. Pure and allocation-free per step.
+//! - [`ChopperScape`] is the Gymnasium-shaped environment ([`Env`]): a game plus the observation pipeline
+//!   (features, or pixels from the [`render::Renderer`], stacked `frame_stack` deep). Its hot path
+//!   [`ChopperScape::step_into`] writes into a buffer the caller owns.
+//! - [`Snapshot`] clones and restores a whole environment, and encodes it to versioned bytes.
+//! - [`policy`] holds the built-in pilots: `random`, fixed actions, and the scripted `heuristic`.
+//!
+//! # Examples
+//! ```
+//! use chopperscape::{ChopperScape, Config, Env};
+//!
+//! let mut env = ChopperScape::new(Config::features()).unwrap();
+//! let (_obs, _info) = env.reset(Some(7));
+//! let mut total = 0.0;
+//! loop {
+//!     let step = env.step(4).unwrap(); // Do Nothing
+//!     total += step.reward;
+//!     if step.terminated || step.truncated {
+//!         println!("return {total}, cause {:?}", step.info.cause);
+//!         break;
+//!     }
+//! }
+//! ```
+
+mod action;
+mod config;
+pub mod consts;
+mod env;
+mod error;
+pub mod features;
+mod geometry;
+mod observation;
+mod observe;
+pub mod render;
+mod rng;
+mod rules;
+mod spaces;
+mod world;
+
+pub use action::{ACTION_MEANINGS, Action, N_ACTIONS};
+pub use config::{BirdFuelCollision, Config, OPTION_NAMES, ObsType};
+pub use env::{ChopperScape, Env, Info, Step, Transition};
+pub use error::{ConfigError, Error, SnapshotError};
+pub use geometry::Rect;
+pub use observation::{ObsBufMut, ObsData, Observation};
+pub use observe::luma;
+pub use rng::Rng;
+pub use rules::{Game, Outcome};
+pub use spaces::{BoxSpace, Discrete, Dtype};
+pub use world::{Alien, Cause, Status, World};

@@ -1,0 +1,181 @@
+//! Turns a [`World`] into the observation the agent sees: features or pixels, stacked `frame_stack` deep.
+//!
+//! Stacking concatenates on the last axis, oldest first: `rgb` `(H, W, 3k)`, `rgb_float` `(H, W, 3k)`,
+//! `grayscale` `(H, W, k)` (no extra axis when `k = 1`: `(H, W)`), `features` `(34k,)`. Reset fills the
+//! stack with the first observation.
+//!
+//! Grayscale is the integer BT.601 luma of the rgb frame: `(299·R + 587·G + 114·B + 500) / 1000`.
+//! `rgb_float` is exactly `rgb as f32 / 255.0`.
+
+use crate::config::{Config, ObsType};
+use crate::error::Error;
+use crate::features::{self, FEATURES_LEN};
+use crate::observation::{ObsBufMut, ObsData};
+use crate::render::Renderer;
+use crate::spaces::{BoxSpace, Dtype};
+use crate::world::World;
+
+/// The observation pipeline of one environment. Owns its buffers; allocates nothing per step.
+#[derive(Clone, Debug)]
+pub(crate) struct Observer {
+    obs_type: ObsType,
+    k: usize,
+    /// Elements per pixel of one unstacked observation: 3 for rgb, 1 for grayscale, 34 for features
+    /// (the features vector stacks as one "pixel").
+    channels: usize,
+    /// The RGB frame the renderer draws into, incrementally (pixel types only).
+    canvas: Vec<u8>,
+    renderer: Renderer,
+    /// The stacked observation (`k > 1` only), in output layout.
+    stacked: ObsData,
+    /// Scratch for the newest unstacked observation (`k > 1` only).
+    newest: ObsData,
+    space: BoxSpace,
+    /// Whether the canvas no longer holds the last drawn frame (after a restore), so the next draw is full.
+    stale: bool,
+}
+
+impl Observer {
+    pub(crate) fn new(config: &Config) -> Observer {
+        let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
+        let k = config.frame_stack as usize;
+        let renderer = Renderer::new(config.obs_size.0, config.obs_size.1, config.hud);
+        let (single_len, channels) = match config.obs_type {
+            ObsType::Features => (FEATURES_LEN, FEATURES_LEN),
+            ObsType::Rgb | ObsType::RgbFloat => (h * w * 3, 3),
+            ObsType::Grayscale => (h * w, 1),
+        };
+        let canvas = if config.obs_type.is_pixels() { vec![255; renderer.frame_len()] } else { Vec::new() };
+        let space = match config.obs_type {
+            ObsType::Features => {
+                let (lo, hi) = (features::low(), features::high());
+                BoxSpace {
+                    shape: vec![FEATURES_LEN * k],
+                    dtype: Dtype::F32,
+                    low: lo.repeat(k),
+                    high: hi.repeat(k),
+                }
+            }
+            ObsType::Rgb => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::U8, 0.0, 255.0),
+            ObsType::RgbFloat => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::F32, 0.0, 1.0),
+            ObsType::Grayscale if k == 1 => BoxSpace::uniform(vec![h, w], Dtype::U8, 0.0, 255.0),
+            ObsType::Grayscale => BoxSpace::uniform(vec![h, w, k], Dtype::U8, 0.0, 255.0),
+        };
+        let (n_stacked, n_newest) = if k > 1 { (single_len * k, single_len) } else { (0, 0) };
+        let zeros = |n: usize| match space.dtype {
+            Dtype::U8 => ObsData::U8(vec![0; n]),
+            Dtype::F32 => ObsData::F32(vec![0.0; n]),
+        };
+        let (stacked, newest) = (zeros(n_stacked), zeros(n_newest));
+        Observer { obs_type: config.obs_type, k, channels, canvas, renderer, stacked, newest, space, stale: true }
+    }
+
+    pub(crate) fn space(&self) -> &BoxSpace {
+        &self.space
+    }
+
+    /// Checks that `out` fits this observation.
+    pub(crate) fn check(&self, out: &ObsBufMut<'_>) -> Result<(), Error> {
+        if out.len() != self.space.len() || out.dtype() != self.space.dtype {
+            return Err(Error::BufferSize {
+                expected: self.space.len(),
+                expected_dtype: self.space.dtype.as_str(),
+                got: out.len(),
+                got_dtype: out.dtype().as_str(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Writes the observation of `world` into `out` (already checked). `reset` starts a new stack and a full redraw.
+    pub(crate) fn observe(&mut self, world: &World, config: &Config, reset: bool, out: ObsBufMut<'_>) {
+        if self.obs_type.is_pixels() {
+            if reset || self.stale {
+                self.stale = false;
+                self.renderer.draw_full(world, config.lives, &mut self.canvas);
+            } else {
+                self.renderer.draw(world, config.lives, &mut self.canvas);
+            }
+        }
+        if self.k == 1 {
+            self.write_single(world, config, out);
+            return;
+        }
+        let (channels, k) = (self.channels, self.k);
+        let mut newest = std::mem::replace(&mut self.newest, ObsData::U8(Vec::new()));
+        let mut stacked = std::mem::replace(&mut self.stacked, ObsData::U8(Vec::new()));
+        match (&mut newest, &mut stacked, out) {
+            (ObsData::U8(n), ObsData::U8(s), ObsBufMut::U8(o)) => {
+                self.write_single(world, config, ObsBufMut::U8(n));
+                push_frame(s, n, channels, k, reset);
+                o.copy_from_slice(s);
+            }
+            (ObsData::F32(n), ObsData::F32(s), ObsBufMut::F32(o)) => {
+                self.write_single(world, config, ObsBufMut::F32(n));
+                push_frame(s, n, channels, k, reset);
+                o.copy_from_slice(s);
+            }
+            _ => unreachable!("buffers of one observer share the observation's dtype"),
+        }
+        self.newest = newest;
+        self.stacked = stacked;
+    }
+
+    /// The stacked observation (empty when `frame_stack = 1`): part of a snapshot.
+    pub(crate) fn stacked(&self) -> &ObsData {
+        &self.stacked
+    }
+
+    /// Replaces the stacked observation (from a snapshot) and forces a full redraw next time.
+    pub(crate) fn set_stacked(&mut self, stacked: ObsData) {
+        self.stacked = stacked;
+        self.stale = true;
+    }
+
+    /// Draws the full 600 × 800 frame of `world` into `rgb` with a fresh renderer (for `render()`).
+    pub(crate) fn render_full(world: &World, config: &Config, rgb: &mut [u8]) {
+        Renderer::new(crate::consts::HEIGHT as u32, crate::consts::WIDTH as u32, true).draw_full(world, config.lives, rgb);
+    }
+
+    /// Writes one unstacked observation of the current world (the canvas is already drawn).
+    fn write_single(&self, world: &World, config: &Config, out: ObsBufMut<'_>) {
+        match (self.obs_type, out) {
+            (ObsType::Features, ObsBufMut::F32(o)) => features::write(world, config.lives, config.max_fuel, o),
+            (ObsType::Rgb, ObsBufMut::U8(o)) => o.copy_from_slice(&self.canvas),
+            (ObsType::RgbFloat, ObsBufMut::F32(o)) => {
+                for (d, &s) in o.iter_mut().zip(&self.canvas) {
+                    *d = s as f32 / 255.0;
+                }
+            }
+            (ObsType::Grayscale, ObsBufMut::U8(o)) => {
+                for (d, p) in o.iter_mut().zip(self.canvas.chunks_exact(3)) {
+                    *d = luma(p[0], p[1], p[2]);
+                }
+            }
+            (t, o) => unreachable!("observation type {t:?} with a {:?} buffer passed check()", o.dtype()),
+        }
+    }
+}
+
+/// BT.601 luma, in integers: `(299·R + 587·G + 114·B + 500) / 1000`.
+#[inline]
+pub fn luma(r: u8, g: u8, b: u8) -> u8 {
+    ((299 * r as u32 + 587 * g as u32 + 114 * b as u32 + 500) / 1000) as u8
+}
+
+/// Shifts each pixel's group of `k` frames one older and appends the newest frame's channels.
+/// `stack` holds pixels of `channels · k` elements; `newest` holds the same pixels of `channels` elements.
+/// On `reset` every slot takes the newest frame.
+fn push_frame<T: Copy>(stack: &mut [T], newest: &[T], channels: usize, k: usize, reset: bool) {
+    let group = channels * k;
+    for (px, new) in stack.chunks_exact_mut(group).zip(newest.chunks_exact(channels)) {
+        if reset {
+            for slot in px.chunks_exact_mut(channels) {
+                slot.copy_from_slice(new);
+            }
+        } else {
+            px.copy_within(channels.., 0);
+            px[group - channels..].copy_from_slice(new);
+        }
+    }
+}

@@ -1,0 +1,82 @@
+//! The state of one episode: every entity on screen, the fuel, the score, the lives.
+//!
+//! A [`World`] is plain data. The rules ([`crate::Game`]) change it; the renderer and the features
+//! observation only read it.
+
+use crate::geometry::Rect;
+
+/// An alien bird: a box plus its age, which decides when it fires.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Alien {
+    /// Where it is.
+    pub body: Rect,
+    /// Steps since it appeared: 0 in the step it appears. It fires when `age == 20`, `60`, `100`, …
+    pub age: u32,
+}
+
+/// Why an episode terminated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Cause {
+    /// A bird, an alien or a missile hit the chopper with no life left to lose.
+    Bird,
+    /// The fuel ran out.
+    Fuel,
+}
+
+impl Cause {
+    /// The name used in infos and JSON: `"bird"` or `"fuel"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Cause::Bird => "bird",
+            Cause::Fuel => "fuel",
+        }
+    }
+}
+
+/// Where an episode stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Status {
+    /// `reset` has not been called yet.
+    #[default]
+    NotStarted,
+    /// The episode goes on.
+    Running,
+    /// The episode ended by the rules.
+    Terminated(Cause),
+    /// The episode was cut off at `max_episode_steps`.
+    Truncated,
+}
+
+impl Status {
+    /// Whether the episode has ended (terminated or truncated).
+    pub fn is_over(self) -> bool {
+        matches!(self, Status::Terminated(_) | Status::Truncated)
+    }
+}
+
+/// Everything on screen and on the HUD after a step.
+///
+/// Lists are in order of appearance, oldest first: that order is part of the rules (SPEC step 5–6).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Default)]
+pub struct World {
+    /// The chopper.
+    pub chopper: Rect,
+    /// Birds on screen, oldest first.
+    pub birds: Vec<Rect>,
+    /// Fuel tanks on screen, oldest first.
+    pub fuel_tanks: Vec<Rect>,
+    /// Alien birds on screen, oldest first (only with `alien_prob > 0`).
+    pub aliens: Vec<Alien>,
+    /// Missiles in flight, oldest first.
+    pub missiles: Vec<Rect>,
+    /// Fuel left, in `[0, max_fuel]`.
+    pub fuel_left: u32,
+    /// Sum of the rewards of this episode (what the HUD shows as `Rewards`).
+    pub episode_return: i64,
+    /// Lives left, in `[0, lives]`.
+    pub lives: u32,
+    /// Agent steps taken in this episode (one `step` call counts once, whatever the frame skip).
+    pub steps: u32,
+    /// Where the episode stands.
+    pub status: Status,
+}
