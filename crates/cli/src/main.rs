@@ -1,0 +1,3 @@
+//! The `chopperscape` command line.
+
+fn main() {}
