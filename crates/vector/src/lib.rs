@@ -1,1 +1,377 @@
-//! Batched stepping of N ChopperScape environments.
+//! Batched stepping of N ChopperScape environments, written into preallocated buffers, over a private
+//! pool of worker threads, with Gymnasium's autoreset.
+//!
+//! # How the types relate
+//! - [`VectorEnv`] owns `num_envs` [`chopperscape::ChopperScape`] environments (environment `i` of a
+//!   batch reset with seed `s` is seeded `s + i`) and a lazily built pool of `num_threads` workers.
+//!   One call steps every environment: the batch is cut into one contiguous chunk per thread.
+//! - [`BatchMut`] holds mutable views of the outputs (observations, rewards, flags, fuel, lives, cause),
+//!   so a caller can hand in memory it owns (numpy arrays). [`Buffers`] owns such arrays for Rust callers;
+//!   [`VectorEnv::reset`] / [`VectorEnv::step`] use buffers the vector env allocates on first use.
+//! - [`AutoresetMode`] says what happens after an episode ends, exactly as Gymnasium's modes of that name.
+//! - [`BatchError`] is everything a call can refuse; a refused call changes no environment.
+//!
+//! # Examples
+//! ```
+//! use chopperscape::Config;
+//! use chopperscape_vector::VectorEnv;
+//!
+//! let mut venv = VectorEnv::new(Config::features(), 8, 2).unwrap();
+//! venv.reset(Some(42)).unwrap();
+//! for _ in 0..100 {
+//!     venv.step(&[4; 8]).unwrap(); // every chopper does nothing
+//! }
+//! assert_eq!(venv.rewards(), &[1.0; 8]);
+//! assert_eq!(venv.fuel(), &[900; 8]);
+//! ```
+
+mod buffers;
+mod error;
+mod pool;
+
+pub use buffers::{BatchMut, Buffers, CAUSE_BIRD, CAUSE_FUEL, CAUSE_NAMES, CAUSE_NONE, Observations, cause_code};
+pub use error::BatchError;
+
+use chopperscape::{BoxSpace, ChopperScape, Config, ConfigError, Env, N_ACTIONS, ObsBufMut};
+
+use crate::pool::LazyPool;
+
+/// What a vector env does with an environment whose episode ended, as Gymnasium's `AutoresetMode`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum AutoresetMode {
+    /// The step after the one that ended the episode resets that environment (its action is ignored) and
+    /// returns the reset observation, reward 0 and both flags false. Gymnasium's default.
+    #[default]
+    NextStep,
+    /// The step that ends the episode resets the environment at once: it returns the reset observation, the
+    /// step's own reward and flags, and the last observation in `final_observations`.
+    SameStep,
+}
+
+/// One environment of the batch and whether it must be reset before its next step (`NextStep`).
+#[derive(Clone, Debug)]
+struct Slot {
+    env: ChopperScape,
+    ended: bool,
+}
+
+/// `num_envs` ChopperScape environments stepped together. See the [crate docs](crate).
+#[derive(Clone, Debug)]
+pub struct VectorEnv {
+    slots: Vec<Slot>,
+    obs_len: usize,
+    mode: AutoresetMode,
+    pool: LazyPool,
+    started: bool,
+    /// Output buffers of [`VectorEnv::reset`] / [`VectorEnv::step`], allocated on their first call.
+    buffers: Option<Buffers>,
+}
+
+impl VectorEnv {
+    /// `num_envs` environments with these options, stepped over `num_threads` threads, with `NextStep`
+    /// autoreset. Call [`VectorEnv::reset`] (or [`VectorEnv::reset_into`]) before stepping.
+    ///
+    /// # Errors
+    /// An option out of range, `num_envs == 0` or `num_threads == 0` (as [`chopperscape::Error::Config`]).
+    pub fn new(config: Config, num_envs: usize, num_threads: usize) -> Result<VectorEnv, chopperscape::Error> {
+        VectorEnv::with_mode(config, num_envs, num_threads, AutoresetMode::NextStep)
+    }
+
+    /// As [`VectorEnv::new`], with the autoreset mode of your choice.
+    ///
+    /// # Errors
+    /// As [`VectorEnv::new`].
+    pub fn with_mode(
+        config: Config,
+        num_envs: usize,
+        num_threads: usize,
+        mode: AutoresetMode,
+    ) -> Result<VectorEnv, chopperscape::Error> {
+        let positive = |option, v: usize| {
+            if v == 0 {
+                Err(ConfigError::OutOfRange { option, value: v.to_string(), allowed: "an integer >= 1" })
+            } else {
+                Ok(())
+            }
+        };
+        positive("num_envs", num_envs)?;
+        positive("num_threads", num_threads)?;
+        let env = ChopperScape::new(config)?;
+        let obs_len = env.obs_len();
+        let slots = vec![Slot { env, ended: false }; num_envs];
+        let pool = LazyPool::new(num_threads.min(num_envs));
+        Ok(VectorEnv { slots, obs_len, mode, pool, started: false, buffers: None })
+    }
+
+    /// Number of environments.
+    pub fn num_envs(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// Worker threads a batch is split over (at most `num_envs`).
+    pub fn num_threads(&self) -> usize {
+        self.pool.threads()
+    }
+
+    /// The autoreset mode.
+    pub fn autoreset_mode(&self) -> AutoresetMode {
+        self.mode
+    }
+
+    /// Elements of one environment's observation.
+    pub fn obs_len(&self) -> usize {
+        self.obs_len
+    }
+
+    /// The observation space of one environment.
+    pub fn single_observation_space(&self) -> &BoxSpace {
+        self.slots[0].env.observation_space()
+    }
+
+    /// The options every environment shares.
+    pub fn config(&self) -> &Config {
+        self.slots[0].env.config()
+    }
+
+    /// Environment `i`, read-only (its world, info, frame).
+    ///
+    /// # Panics
+    /// If `i >= num_envs`.
+    pub fn env(&self, i: usize) -> &ChopperScape {
+        &self.slots[i].env
+    }
+
+    /// Owned buffers the size of this batch (with the final-observation buffer in `SameStep` mode).
+    pub fn new_buffers(&self) -> Buffers {
+        let space = self.single_observation_space();
+        Buffers::new(self.num_envs(), self.obs_len, space.dtype, self.mode == AutoresetMode::SameStep)
+    }
+
+    /// Resets every environment: with `Some(s)`, environment `i` is seeded `s + i` (wrapping); with `None`,
+    /// each continues its own generator stream, except that a batch never seeded before starts as if
+    /// seeded 0. Writes the first observations and infos into `out` (rewards 0, flags false).
+    ///
+    /// # Errors
+    /// A buffer of the wrong size; nothing changes then.
+    pub fn reset_into(&mut self, seed: Option<u64>, out: BatchMut<'_>) -> Result<(), BatchError> {
+        let seed = seed.or((!self.started).then_some(0));
+        self.reset_each(|i| seed.map(|s| s.wrapping_add(i as u64)), out)
+    }
+
+    /// Resets every environment, environment `i` with `seeds[i]` (`None` continues its stream).
+    ///
+    /// # Errors
+    /// A seed list or buffer of the wrong size; nothing changes then.
+    pub fn reset_seeds_into(&mut self, seeds: &[Option<u64>], out: BatchMut<'_>) -> Result<(), BatchError> {
+        if seeds.len() != self.num_envs() {
+            return Err(BatchError::SeedCount { expected: self.num_envs(), got: seeds.len() });
+        }
+        self.reset_each(|i| seeds[i], out)
+    }
+
+    fn reset_each(&mut self, seed: impl Fn(usize) -> Option<u64> + Sync, out: BatchMut<'_>) -> Result<(), BatchError> {
+        let space = self.single_observation_space();
+        out.check(self.num_envs(), self.obs_len, space.dtype)?;
+        let obs_len = self.obs_len;
+        self.for_each_chunk(out, |first, slots, out| {
+            let BatchMut { observations, rewards, terminated, truncated, fuel, lives, cause, .. } = out;
+            for_each_obs(observations, obs_len, |j, obs| {
+                let slot = &mut slots[j];
+                let info = slot.env.reset_into(seed(first + j), obs).expect("buffer sizes were checked");
+                slot.ended = false;
+                rewards[j] = 0.0;
+                terminated[j] = false;
+                truncated[j] = false;
+                fuel[j] = info.fuel;
+                lives[j] = info.lives;
+                cause[j] = CAUSE_NONE;
+            });
+        })?;
+        self.started = true;
+        Ok(())
+    }
+
+    /// Steps every environment with its action (`actions[i]` for environment `i`) and writes the results
+    /// into `out`, with autoreset as [`VectorEnv::autoreset_mode`] says.
+    ///
+    /// # Errors
+    /// A wrong number of actions, an action outside `0..=4`, a buffer of the wrong size, or a step before
+    /// any reset. Everything is checked before any environment moves, so nothing changes then.
+    pub fn step_into(&mut self, actions: &[i64], out: BatchMut<'_>) -> Result<(), BatchError> {
+        if actions.len() != self.num_envs() {
+            return Err(BatchError::ActionCount { expected: self.num_envs(), got: actions.len() });
+        }
+        if let Some(index) = actions.iter().position(|&a| !(0..N_ACTIONS as i64).contains(&a)) {
+            return Err(BatchError::InvalidAction { index, action: actions[index] });
+        }
+        if !self.started {
+            return Err(BatchError::NotReset);
+        }
+        let space = self.single_observation_space();
+        out.check(self.num_envs(), self.obs_len, space.dtype)?;
+        let (obs_len, mode) = (self.obs_len, self.mode);
+        if mode == AutoresetMode::SameStep && out.final_observations.is_none() {
+            return Err(BatchError::MissingFinalObservations);
+        }
+        self.for_each_chunk(out, |first, slots, out| {
+            let BatchMut { observations, rewards, terminated, truncated, fuel, lives, cause, final_observations } = out;
+            let mut finals = final_observations;
+            for_each_obs(observations, obs_len, |j, mut obs| {
+                let slot = &mut slots[j];
+                if slot.ended {
+                    // NextStep: this step is the reset; the action is ignored.
+                    let info = slot.env.reset_into(None, obs).expect("buffer sizes were checked");
+                    slot.ended = false;
+                    rewards[j] = 0.0;
+                    terminated[j] = false;
+                    truncated[j] = false;
+                    fuel[j] = info.fuel;
+                    lives[j] = info.lives;
+                    cause[j] = CAUSE_NONE;
+                    return;
+                }
+                let t = slot
+                    .env
+                    .step_into(actions[first + j], reborrow(&mut obs))
+                    .expect("actions, buffers and episode states were checked");
+                rewards[j] = t.reward;
+                terminated[j] = t.terminated;
+                truncated[j] = t.truncated;
+                fuel[j] = t.info.fuel;
+                lives[j] = t.info.lives;
+                cause[j] = cause_code(t.info.cause);
+                if t.terminated || t.truncated {
+                    match finals.as_mut() {
+                        None => slot.ended = true,
+                        Some(finals) => {
+                            copy_obs(&obs, finals, j * obs_len);
+                            slot.env.reset_into(None, obs).expect("buffer sizes were checked");
+                        }
+                    }
+                }
+            });
+        })
+    }
+
+    /// Runs `f(first_env_index, slots, outputs)` on one contiguous chunk of environments per thread.
+    fn for_each_chunk(
+        &mut self,
+        out: BatchMut<'_>,
+        f: impl Fn(usize, &mut [Slot], BatchMut<'_>) + Sync,
+    ) -> Result<(), BatchError> {
+        let n = self.slots.len();
+        let threads = self.pool.threads();
+        if threads <= 1 {
+            f(0, &mut self.slots, out);
+            return Ok(());
+        }
+        let chunk = n.div_ceil(threads);
+        let obs_len = self.obs_len;
+        let slots = &mut self.slots;
+        self.pool.get()?.install(|| split_run(0, slots, out, chunk, obs_len, &f));
+        Ok(())
+    }
+
+    /// Resets every environment into the vector env's own buffers (see [`VectorEnv::reset_into`]).
+    ///
+    /// # Errors
+    /// Never in practice: the own buffers always fit.
+    pub fn reset(&mut self, seed: Option<u64>) -> Result<(), BatchError> {
+        let mut buffers = self.buffers.take().unwrap_or_else(|| self.new_buffers());
+        let result = self.reset_into(seed, buffers.as_mut());
+        self.buffers = Some(buffers);
+        result
+    }
+
+    /// Steps every environment into the vector env's own buffers (see [`VectorEnv::step_into`]).
+    ///
+    /// # Errors
+    /// As [`VectorEnv::step_into`]; nothing changes then.
+    pub fn step(&mut self, actions: &[i64]) -> Result<(), BatchError> {
+        let mut buffers = self.buffers.take().unwrap_or_else(|| self.new_buffers());
+        let result = self.step_into(actions, buffers.as_mut());
+        self.buffers = Some(buffers);
+        result
+    }
+
+    /// The buffers [`VectorEnv::reset`] and [`VectorEnv::step`] write into; `None` before the first of them.
+    pub fn buffers(&self) -> Option<&Buffers> {
+        self.buffers.as_ref()
+    }
+
+    /// Observations of the last [`VectorEnv::reset`] / [`VectorEnv::step`], environment after environment
+    /// (empty before the first).
+    pub fn observations(&self) -> Observations<'_> {
+        self.buffers.as_ref().map_or(Observations::U8(&[]), Buffers::observations)
+    }
+
+    /// Rewards of the last step (empty before the first reset).
+    pub fn rewards(&self) -> &[f32] {
+        self.buffers.as_ref().map_or(&[], |b| &b.rewards)
+    }
+
+    /// Termination flags of the last step (empty before the first reset).
+    pub fn terminated(&self) -> &[bool] {
+        self.buffers.as_ref().map_or(&[], |b| &b.terminated)
+    }
+
+    /// Truncation flags of the last step (empty before the first reset).
+    pub fn truncated(&self) -> &[bool] {
+        self.buffers.as_ref().map_or(&[], |b| &b.truncated)
+    }
+
+    /// Fuel left after the last step (empty before the first reset).
+    pub fn fuel(&self) -> &[u32] {
+        self.buffers.as_ref().map_or(&[], |b| &b.fuel)
+    }
+
+    /// Lives left after the last step (empty before the first reset).
+    pub fn lives(&self) -> &[u32] {
+        self.buffers.as_ref().map_or(&[], |b| &b.lives)
+    }
+
+    /// Termination cause codes of the last step ([`CAUSE_NAMES`]; empty before the first reset).
+    pub fn causes(&self) -> &[u8] {
+        self.buffers.as_ref().map_or(&[], |b| &b.cause)
+    }
+}
+
+/// Halves the batch at a chunk boundary until each part is one chunk, running the halves with `rayon::join`:
+/// one contiguous chunk per thread, no allocation.
+fn split_run<F>(first: usize, slots: &mut [Slot], out: BatchMut<'_>, chunk: usize, obs_len: usize, f: &F)
+where
+    F: Fn(usize, &mut [Slot], BatchMut<'_>) + Sync,
+{
+    if slots.len() <= chunk {
+        f(first, slots, out);
+        return;
+    }
+    let mid = slots.len().div_ceil(chunk) / 2 * chunk;
+    let (s1, s2) = slots.split_at_mut(mid);
+    let (o1, o2) = out.split_at(mid, obs_len);
+    rayon::join(|| split_run(first, s1, o1, chunk, obs_len, f), || split_run(first + mid, s2, o2, chunk, obs_len, f));
+}
+
+/// Calls `f(j, observation j)` for each `obs_len`-element observation of `buf`.
+fn for_each_obs(buf: ObsBufMut<'_>, obs_len: usize, mut f: impl FnMut(usize, ObsBufMut<'_>)) {
+    match buf {
+        ObsBufMut::U8(b) => b.chunks_exact_mut(obs_len).enumerate().for_each(|(j, o)| f(j, ObsBufMut::U8(o))),
+        ObsBufMut::F32(b) => b.chunks_exact_mut(obs_len).enumerate().for_each(|(j, o)| f(j, ObsBufMut::F32(o))),
+    }
+}
+
+fn reborrow<'a>(b: &'a mut ObsBufMut<'_>) -> ObsBufMut<'a> {
+    match b {
+        ObsBufMut::U8(s) => ObsBufMut::U8(s),
+        ObsBufMut::F32(s) => ObsBufMut::F32(s),
+    }
+}
+
+/// Copies one observation into `to` at element `at`.
+fn copy_obs(from: &ObsBufMut<'_>, to: &mut ObsBufMut<'_>, at: usize) {
+    match (from, to) {
+        (ObsBufMut::U8(f), ObsBufMut::U8(t)) => t[at..at + f.len()].copy_from_slice(f),
+        (ObsBufMut::F32(f), ObsBufMut::F32(t)) => t[at..at + f.len()].copy_from_slice(f),
+        _ => unreachable!("both buffers were checked against the observation's dtype"),
+    }
+}
