@@ -35,6 +35,8 @@ mod config;
 pub mod consts;
 mod env;
 mod error;
+#[cfg(feature = "export")]
+pub mod export;
 pub mod features;
 mod geometry;
 mod observation;

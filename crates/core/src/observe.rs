@@ -4,16 +4,22 @@
 //! `grayscale` `(H, W, k)` (no extra axis when `k = 1`: `(H, W)`), `features` `(34k,)`. Reset fills the
 //! stack with the first observation.
 //!
-//! Grayscale is the integer BT.601 luma of the rgb frame: `(299·R + 587·G + 114·B + 500) / 1000`.
+//! Grayscale is the integer BT.601 luma of the rgb frame: `(299·R + 587·G + 114·B + 500) / 1000`. It is drawn
+//! directly into a one-byte-per-pixel canvas (every pixel is a palette colour or a precomputed sprite colour, so
+//! its luma is precomputed too); tests check it equals the luma of the rgb frame.
 //! `rgb_float` is exactly `rgb as f32 / 255.0`.
+//!
+//! The canvas is drawn incrementally ([`Renderer::draw`]) and copied out; `render()` paints the full 600 × 800
+//! frame from one shared renderer, built once.
 
 use crate::config::{Config, ObsType};
 use crate::error::Error;
 use crate::features::{self, FEATURES_LEN};
 use crate::observation::{ObsBufMut, ObsData};
-use crate::render::Renderer;
+use crate::render::{PixelFormat, Renderer};
 use crate::spaces::{BoxSpace, Dtype};
 use crate::world::World;
+use std::sync::OnceLock;
 
 /// The observation pipeline of one environment. Owns its buffers; allocates nothing per step.
 #[derive(Clone, Debug)]
@@ -23,7 +29,7 @@ pub(crate) struct Observer {
     /// Elements per pixel of one unstacked observation: 3 for rgb, 1 for grayscale, 34 for features
     /// (the features vector stacks as one "pixel").
     channels: usize,
-    /// The RGB frame the renderer draws into, incrementally (pixel types only).
+    /// The frame the renderer draws into, incrementally (pixel types only): RGB, or gray for `grayscale`.
     canvas: Vec<u8>,
     renderer: Renderer,
     /// The stacked observation (`k > 1` only), in output layout.
@@ -39,7 +45,8 @@ impl Observer {
     pub(crate) fn new(config: &Config) -> Observer {
         let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
         let k = config.frame_stack as usize;
-        let renderer = Renderer::new(config.obs_size.0, config.obs_size.1, config.hud);
+        let format = if config.obs_type == ObsType::Grayscale { PixelFormat::Gray } else { PixelFormat::Rgb };
+        let renderer = Renderer::with_format(config.obs_size.0, config.obs_size.1, config.hud, format);
         let (single_len, channels) = match config.obs_type {
             ObsType::Features => (FEATURES_LEN, FEATURES_LEN),
             ObsType::Rgb | ObsType::RgbFloat => (h * w * 3, 3),
@@ -49,12 +56,7 @@ impl Observer {
         let space = match config.obs_type {
             ObsType::Features => {
                 let (lo, hi) = (features::low(), features::high());
-                BoxSpace {
-                    shape: vec![FEATURES_LEN * k],
-                    dtype: Dtype::F32,
-                    low: lo.repeat(k),
-                    high: hi.repeat(k),
-                }
+                BoxSpace { shape: vec![FEATURES_LEN * k], dtype: Dtype::F32, low: lo.repeat(k), high: hi.repeat(k) }
             }
             ObsType::Rgb => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::U8, 0.0, 255.0),
             ObsType::RgbFloat => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::F32, 0.0, 1.0),
@@ -132,24 +134,22 @@ impl Observer {
         self.stale = true;
     }
 
-    /// Draws the full 600 × 800 frame of `world` into `rgb` with a fresh renderer (for `render()`).
+    /// Draws the full 600 × 800 frame of `world`, HUD included, into `rgb` (for `render()`), with a renderer
+    /// shared by every environment and built on first use.
     pub(crate) fn render_full(world: &World, config: &Config, rgb: &mut [u8]) {
-        Renderer::new(crate::consts::HEIGHT as u32, crate::consts::WIDTH as u32, true).draw_full(world, config.lives, rgb);
+        static FULL: OnceLock<Renderer> = OnceLock::new();
+        let full = FULL.get_or_init(|| Renderer::new(crate::consts::HEIGHT as u32, crate::consts::WIDTH as u32, true));
+        full.paint(world, config.lives, rgb);
     }
 
     /// Writes one unstacked observation of the current world (the canvas is already drawn).
     fn write_single(&self, world: &World, config: &Config, out: ObsBufMut<'_>) {
         match (self.obs_type, out) {
             (ObsType::Features, ObsBufMut::F32(o)) => features::write(world, config.lives, config.max_fuel, o),
-            (ObsType::Rgb, ObsBufMut::U8(o)) => o.copy_from_slice(&self.canvas),
+            (ObsType::Rgb | ObsType::Grayscale, ObsBufMut::U8(o)) => o.copy_from_slice(&self.canvas),
             (ObsType::RgbFloat, ObsBufMut::F32(o)) => {
                 for (d, &s) in o.iter_mut().zip(&self.canvas) {
                     *d = s as f32 / 255.0;
-                }
-            }
-            (ObsType::Grayscale, ObsBufMut::U8(o)) => {
-                for (d, p) in o.iter_mut().zip(self.canvas.chunks_exact(3)) {
-                    *d = luma(p[0], p[1], p[2]);
                 }
             }
             (t, o) => unreachable!("observation type {t:?} with a {:?} buffer passed check()", o.dtype()),
