@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Builds the browser page into web/dist/: the core compiled to wasm32 through wasm-bindgen (pkg/), plus the
+# page's HTML, JavaScript and CSS. Installs the wasm target and wasm-bindgen-cli 0.2.130 (the version the
+# crate pins) when missing. Downloads nothing at build time beyond those; no wasm-pack.
+set -euo pipefail
+. "$(dirname "$0")/lib.sh"
+cd "$ROOT"
+
+WASM_BINDGEN_VERSION=0.2.130
+quiet rustup target add wasm32-unknown-unknown
+if [ "$(wasm-bindgen --version 2>/dev/null || true)" != "wasm-bindgen $WASM_BINDGEN_VERSION" ]; then
+  say "installing wasm-bindgen-cli $WASM_BINDGEN_VERSION (once; a few minutes)"
+  quiet cargo install wasm-bindgen-cli --version "$WASM_BINDGEN_VERSION"
+fi
+
+quiet cargo build -p chopperscape-web --release --target wasm32-unknown-unknown
+target_dir="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
+
+# Build beside dist, then swap, so a failed build never leaves a half-written page.
+out="web/dist.tmp"
+rm -rf "$out"
+mkdir -p "$out"
+quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
+  "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
+cp web/index.html web/main.js web/style.css "$out/"
+rm -rf web/dist
+mv "$out" web/dist

@@ -1,0 +1,230 @@
+// The ChopperScape page: runs the Rust game (compiled to WebAssembly) at 30 steps per second and draws each
+// frame straight from WebAssembly memory into the canvas.
+import init, { Game } from "./pkg/chopperscape_web.js";
+
+const STEP_MS = 1000 / 30; // SPEC: render_fps = 30
+const MAX_STEPS_PER_FRAME = 5; // after a stall (hidden tab), catch up a little, never in a burst
+const WIDTH = 800;
+const HEIGHT = 600;
+const NOOP = 4;
+// Held direction keys map to actions: 0 Right, 1 Left, 2 Down, 3 Up.
+const DIRECTIONS = {
+  ArrowRight: 0, KeyD: 0,
+  ArrowLeft: 1, KeyA: 1,
+  ArrowDown: 2, KeyS: 2,
+  ArrowUp: 3, KeyW: 3,
+};
+const CAUSES = { bird: "Hit by a bird", fuel: "Out of fuel" };
+
+const $ = (id) => document.getElementById(id);
+const canvas = $("screen");
+const ctx = canvas.getContext("2d", { alpha: false });
+
+const wasm = await init();
+
+let game = null;
+let over = false;
+let paused = false;
+let pilot = false;
+let lastCause = null;
+let held = []; // codes of held direction keys, the last pressed last: it wins
+let acc = 0;
+let last = null;
+
+function draw() {
+  // A view, not a copy: the pixels live in WebAssembly memory. Views are remade each frame because
+  // memory.buffer changes when the memory grows.
+  const pixels = new Uint8ClampedArray(wasm.memory.buffer, game.frame_ptr(), game.frame_len());
+  ctx.putImageData(new ImageData(pixels, WIDTH, HEIGHT), 0, 0);
+}
+
+function showError(text) {
+  $("error").textContent = text;
+  $("error").hidden = !text;
+}
+
+function readSeed() {
+  const text = $("seed").value.trim();
+  if (!/^\d+$/.test(text) || BigInt(text) >= 2n ** 64n) {
+    throw new Error(`invalid seed \`${text}\`: allowed an integer in 0..=18446744073709551615`);
+  }
+  return BigInt(text);
+}
+
+// Starts a game from the form. Returns the error message, or null. A bad form changes nothing.
+function newGame() {
+  let next;
+  let seed;
+  try {
+    seed = readSeed();
+    next = new Game(["lives", "alien_prob"], [$("lives").value, $("alien_prob").value]);
+  } catch (e) {
+    showError(e.message);
+    return e.message;
+  }
+  showError("");
+  game?.free();
+  game = next;
+  game.reset(seed);
+  over = false;
+  lastCause = null;
+  acc = 0;
+  $("message").hidden = true;
+  draw();
+  updateStatus();
+  return null;
+}
+
+function action() {
+  if (pilot) return game.pilot_action();
+  return held.length ? DIRECTIONS[held[held.length - 1]] : NOOP;
+}
+
+function stepOnce(a) {
+  const r = game.step(a);
+  const result = { reward: r.reward, terminated: r.terminated, truncated: r.truncated, cause: r.cause ?? null };
+  r.free();
+  if (result.terminated || result.truncated) endEpisode(result);
+  return result;
+}
+
+function endEpisode(result) {
+  over = true;
+  lastCause = result.terminated ? result.cause : "truncated";
+  $("message-title").textContent = result.terminated ? CAUSES[result.cause] : "Time's up";
+  $("message-detail").textContent = `Return ${game.episode_return()} after ${game.steps()} steps`;
+  $("message").hidden = false;
+}
+
+function setPaused(on) {
+  paused = on;
+  $("pause").setAttribute("aria-pressed", String(on));
+  $("pause").textContent = on ? "Resume" : "Pause";
+  $("paused").hidden = !on || over;
+  updateStatus();
+}
+
+function setPilot(on) {
+  pilot = on;
+  $("pilot").setAttribute("aria-pressed", String(on));
+  if (on && over) newGame();
+  updateStatus();
+}
+
+function updateStatus() {
+  const who = pilot ? "The pilot is flying" : "You are flying";
+  const state = over ? "episode over" : paused ? "paused" : `step ${game.steps()}`;
+  $("status").textContent = `${who} · ${state}`;
+}
+
+function frame(now) {
+  if (last !== null) acc += now - last;
+  last = now;
+  if (!game || over || paused) acc = 0;
+  let steps = 0;
+  while (acc >= STEP_MS && !over) {
+    if (steps === MAX_STEPS_PER_FRAME) {
+      acc = 0;
+      break;
+    }
+    acc -= STEP_MS;
+    stepOnce(action());
+    steps += 1;
+  }
+  if (steps) {
+    draw();
+    updateStatus();
+  }
+  requestAnimationFrame(frame);
+}
+
+function isTyping(event) {
+  return event.target instanceof HTMLInputElement;
+}
+
+window.addEventListener("keydown", (event) => {
+  if (isTyping(event) || event.ctrlKey || event.metaKey || event.altKey) return;
+  if (event.code in DIRECTIONS) {
+    event.preventDefault();
+    held = held.filter((c) => c !== event.code);
+    held.push(event.code);
+  } else if (event.code === "KeyP" && !event.repeat) {
+    setPaused(!paused);
+  } else if (event.code === "KeyR" && !event.repeat) {
+    newGame();
+  }
+});
+window.addEventListener("keyup", (event) => {
+  held = held.filter((c) => c !== event.code);
+});
+window.addEventListener("blur", () => {
+  held = [];
+});
+
+$("controls").addEventListener("submit", (event) => {
+  event.preventDefault();
+  if (newGame() === null) canvas.focus();
+});
+$("pause").addEventListener("click", () => setPaused(!paused));
+$("pilot").addEventListener("click", () => setPilot(!pilot));
+
+function base64(bytes) {
+  let text = "";
+  for (let i = 0; i < bytes.length; i += 0x8000) {
+    text += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+  }
+  return btoa(text);
+}
+
+// A small hook for the browser tests: read the state and the frame, and step by hand.
+window.chopperscape = {
+  state: () => ({
+    x: game.chopper_x(),
+    y: game.chopper_y(),
+    fuel: game.fuel(),
+    lives: game.lives(),
+    score: game.episode_return(),
+    steps: game.steps(),
+    over,
+    cause: lastCause,
+    paused,
+    pilot,
+  }),
+  // Fills the form and starts a game; returns the error message, or null.
+  newGame(seed, options = {}) {
+    $("seed").value = String(seed);
+    $("lives").value = String(options.lives ?? 1);
+    $("alien_prob").value = String(options.alien_prob ?? 0);
+    return newGame();
+  },
+  setPaused,
+  setPilot,
+  // Steps these actions now (paused or not), stopping if the episode ends; then draws.
+  stepN(actions) {
+    for (const a of actions) {
+      if (over) break;
+      stepOnce(a);
+    }
+    draw();
+    updateStatus();
+    return this.state();
+  },
+  // The frame as the canvas shows it, RGB, base64.
+  frameBytes() {
+    const rgba = ctx.getImageData(0, 0, WIDTH, HEIGHT).data;
+    const rgb = new Uint8Array(WIDTH * HEIGHT * 3);
+    for (let i = 0, j = 0; i < rgba.length; i += 4, j += 3) {
+      rgb[j] = rgba[i];
+      rgb[j + 1] = rgba[i + 1];
+      rgb[j + 2] = rgba[i + 2];
+    }
+    return base64(rgb);
+  },
+  // The RGB frame in WebAssembly memory, base64.
+  wasmFrameBytes: () => base64(new Uint8Array(wasm.memory.buffer, game.rgb_ptr(), game.rgb_len())),
+};
+
+newGame();
+canvas.focus();
+requestAnimationFrame(frame);
+window.chopperscape.ready = true;
