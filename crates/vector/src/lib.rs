@@ -53,6 +53,8 @@ pub enum AutoresetMode {
 struct Slot {
     env: ChopperScape,
     ended: bool,
+    /// Steps since the last reset, for [`VectorEnv::set_time_limit`].
+    elapsed: u32,
 }
 
 /// `num_envs` ChopperScape environments stepped together. See the [crate docs](crate).
@@ -62,6 +64,7 @@ pub struct VectorEnv {
     obs_len: usize,
     mode: AutoresetMode,
     pool: LazyPool,
+    time_limit: Option<u32>,
     started: bool,
     /// Output buffers of [`VectorEnv::reset`] / [`VectorEnv::step`], allocated on their first call.
     buffers: Option<Buffers>,
@@ -98,9 +101,9 @@ impl VectorEnv {
         positive("num_threads", num_threads)?;
         let env = ChopperScape::new(config)?;
         let obs_len = env.obs_len();
-        let slots = vec![Slot { env, ended: false }; num_envs];
+        let slots = vec![Slot { env, ended: false, elapsed: 0 }; num_envs];
         let pool = LazyPool::new(num_threads.min(num_envs));
-        Ok(VectorEnv { slots, obs_len, mode, pool, started: false, buffers: None })
+        Ok(VectorEnv { slots, obs_len, mode, pool, time_limit: None, started: false, buffers: None })
     }
 
     /// Number of environments.
@@ -111,6 +114,27 @@ impl VectorEnv {
     /// Worker threads a batch is split over (at most `num_envs`).
     pub fn num_threads(&self) -> usize {
         self.pool.threads()
+    }
+
+    /// Truncates each episode after `limit` steps exactly as Gymnasium's `TimeLimit` wrapper does: the step
+    /// that reaches the limit is truncated even when it also terminates (the core's own `max_episode_steps`
+    /// reports only one of the two). Use it with `max_episode_steps: None` in the config, so that truncation
+    /// comes from one place; `None` (the default) leaves truncation to the config.
+    ///
+    /// # Errors
+    /// `Some(0)` (as [`chopperscape::Error::Config`]).
+    pub fn set_time_limit(&mut self, limit: Option<u32>) -> Result<(), chopperscape::Error> {
+        if limit == Some(0) {
+            let allowed = "a positive integer, or none to never truncate";
+            return Err(ConfigError::OutOfRange { option: "max_episode_steps", value: "0".into(), allowed }.into());
+        }
+        self.time_limit = limit;
+        Ok(())
+    }
+
+    /// The time limit of [`VectorEnv::set_time_limit`].
+    pub fn time_limit(&self) -> Option<u32> {
+        self.time_limit
     }
 
     /// The autoreset mode.
@@ -179,6 +203,7 @@ impl VectorEnv {
                 let slot = &mut slots[j];
                 let info = slot.env.reset_into(seed(first + j), obs).expect("buffer sizes were checked");
                 slot.ended = false;
+                slot.elapsed = 0;
                 rewards[j] = 0.0;
                 terminated[j] = false;
                 truncated[j] = false;
@@ -209,7 +234,7 @@ impl VectorEnv {
         }
         let space = self.single_observation_space();
         out.check(self.num_envs(), self.obs_len, space.dtype)?;
-        let (obs_len, mode) = (self.obs_len, self.mode);
+        let (obs_len, mode, limit) = (self.obs_len, self.mode, self.time_limit.unwrap_or(u32::MAX));
         if mode == AutoresetMode::SameStep && out.final_observations.is_none() {
             return Err(BatchError::MissingFinalObservations);
         }
@@ -222,6 +247,7 @@ impl VectorEnv {
                     // NextStep: this step is the reset; the action is ignored.
                     let info = slot.env.reset_into(None, obs).expect("buffer sizes were checked");
                     slot.ended = false;
+                    slot.elapsed = 0;
                     rewards[j] = 0.0;
                     terminated[j] = false;
                     truncated[j] = false;
@@ -234,18 +260,21 @@ impl VectorEnv {
                     .env
                     .step_into(actions[first + j], reborrow(&mut obs))
                     .expect("actions, buffers and episode states were checked");
+                slot.elapsed += 1;
+                let truncated_now = t.truncated || slot.elapsed >= limit;
                 rewards[j] = t.reward;
                 terminated[j] = t.terminated;
-                truncated[j] = t.truncated;
+                truncated[j] = truncated_now;
                 fuel[j] = t.info.fuel;
                 lives[j] = t.info.lives;
                 cause[j] = cause_code(t.info.cause);
-                if t.terminated || t.truncated {
+                if t.terminated || truncated_now {
                     match finals.as_mut() {
                         None => slot.ended = true,
                         Some(finals) => {
                             copy_obs(&obs, finals, j * obs_len);
                             slot.env.reset_into(None, obs).expect("buffer sizes were checked");
+                            slot.elapsed = 0;
                         }
                     }
                 }

@@ -206,3 +206,44 @@ fn a_batch_never_seeded_starts_as_if_seeded_zero() {
     b.reset(Some(0)).unwrap();
     assert_eq!(a.observations(), b.observations());
 }
+
+#[test]
+fn time_limit_truncates_like_gymnasiums_time_limit_even_on_a_terminating_step() {
+    // Fuel for exactly 12 steps and a limit of 12: step 12 both terminates (fuel) and reaches the limit.
+    let config = Config { max_fuel: 12, bird_prob: 0.0, fuel_prob: 0.0, max_episode_steps: None, ..Config::features() };
+    let mut venv = VectorEnv::new(config.clone(), 2, 1).unwrap();
+    assert!(venv.set_time_limit(Some(0)).unwrap_err().to_string().contains("max_episode_steps"));
+    venv.set_time_limit(Some(12)).unwrap();
+    venv.reset(Some(0)).unwrap();
+    for step in 1..=11 {
+        venv.step(&[4, 4]).unwrap();
+        assert_eq!((venv.terminated(), venv.truncated()), (&[false; 2][..], &[false; 2][..]), "step {step}");
+    }
+    venv.step(&[4, 4]).unwrap();
+    assert_eq!((venv.terminated(), venv.truncated()), (&[true; 2][..], &[true; 2][..]));
+    venv.step(&[4, 4]).unwrap(); // the reset step
+    assert_eq!(venv.fuel(), &[12, 12]);
+    // Without the limit the core alone reports only the termination.
+    let mut plain = VectorEnv::new(config, 1, 1).unwrap();
+    plain.reset(Some(0)).unwrap();
+    for _ in 0..12 {
+        plain.step(&[4]).unwrap();
+    }
+    assert_eq!((plain.terminated(), plain.truncated()), (&[true][..], &[false][..]));
+}
+
+#[test]
+fn time_limit_counts_from_each_autoreset() {
+    let config = Config { bird_prob: 0.0, fuel_prob: 0.0, max_episode_steps: None, ..Config::features() };
+    let mut venv = VectorEnv::with_mode(config, 1, 1, AutoresetMode::SameStep).unwrap();
+    venv.set_time_limit(Some(5)).unwrap();
+    venv.reset(Some(3)).unwrap();
+    let truncations: Vec<bool> = (0..15)
+        .map(|_| {
+            venv.step(&[4]).unwrap();
+            venv.truncated()[0]
+        })
+        .collect();
+    let expected: Vec<bool> = (1..=15).map(|t| t % 5 == 0).collect();
+    assert_eq!(truncations, expected);
+}

@@ -1,0 +1,264 @@
+//! `chopperscape._core.VectorEnv`: a batch of environments stepped by one call with the GIL released,
+//! written into numpy arrays. The Gymnasium class in `chopperscape/vector.py` wraps it.
+
+use chopperscape::{Dtype, ObsBufMut, Snapshot};
+use chopperscape_vector::{AutoresetMode, BatchMut, VectorEnv};
+use numpy::{PyArray1, PyArray3, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
+use pyo3::exceptions::{PyIndexError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyTuple};
+
+use crate::errors::{batch_error, env_error};
+use crate::obs::ObsArray;
+use crate::options::config_from;
+
+/// The output arrays of a batch.
+struct Arrays {
+    obs: ObsPy,
+    final_obs: Option<ObsPy>,
+    rewards: Py<PyArray1<f32>>,
+    terminated: Py<PyArray1<bool>>,
+    truncated: Py<PyArray1<bool>>,
+    fuel: Py<PyArray1<u32>>,
+    lives: Py<PyArray1<u32>>,
+    cause: Py<PyArray1<u8>>,
+}
+
+enum ObsPy {
+    U8(Py<PyArrayDyn<u8>>),
+    F32(Py<PyArrayDyn<f32>>),
+}
+
+/// Write borrows of an observation array.
+enum ObsRw<'py> {
+    U8(PyReadwriteArrayDyn<'py, u8>),
+    F32(PyReadwriteArrayDyn<'py, f32>),
+}
+
+impl ObsPy {
+    fn new(py: Python<'_>, shape: &[usize], dtype: Dtype) -> ObsPy {
+        match ObsArray::zeros(py, shape, dtype) {
+            ObsArray::U8(a) => ObsPy::U8(a.unbind()),
+            ObsArray::F32(a) => ObsPy::F32(a.unbind()),
+        }
+    }
+
+    fn bind<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        match self {
+            ObsPy::U8(a) => a.bind(py).clone().into_any(),
+            ObsPy::F32(a) => a.bind(py).clone().into_any(),
+        }
+    }
+
+    fn borrow<'py>(&self, py: Python<'py>) -> PyResult<ObsRw<'py>> {
+        Ok(match self {
+            ObsPy::U8(a) => ObsRw::U8(a.bind(py).try_readwrite().map_err(borrowed)?),
+            ObsPy::F32(a) => ObsRw::F32(a.bind(py).try_readwrite().map_err(borrowed)?),
+        })
+    }
+}
+
+impl ObsRw<'_> {
+    fn as_buf_mut(&mut self) -> ObsBufMut<'_> {
+        match self {
+            ObsRw::U8(a) => ObsBufMut::U8(a.as_slice_mut().expect("the binding's own arrays are contiguous")),
+            ObsRw::F32(a) => ObsBufMut::F32(a.as_slice_mut().expect("the binding's own arrays are contiguous")),
+        }
+    }
+}
+
+fn borrowed(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(format!("the vector env's output arrays are in use elsewhere: {e}"))
+}
+
+fn rw<'py, T: numpy::Element>(a: &Py<PyArray1<T>>, py: Python<'py>) -> PyResult<PyReadwriteArray1<'py, T>> {
+    a.bind(py).try_readwrite().map_err(borrowed)
+}
+
+/// `num_envs` environments stepped together over `num_threads` threads; environment `i` of a batch reset with
+/// seed `s` is seeded `s + i`. With `copy`, each call returns fresh arrays; without, the same arrays every call.
+/// `time_limit` truncates episodes as Gymnasium's `TimeLimit` does (see `VectorEnv::set_time_limit`).
+#[pyclass(name = "VectorEnv", module = "chopperscape._core")]
+pub(crate) struct PyVectorEnv {
+    inner: VectorEnv,
+    copy: bool,
+    arrays: Option<Arrays>,
+}
+
+impl PyVectorEnv {
+    fn new_arrays(&self, py: Python<'_>) -> Arrays {
+        let n = self.inner.num_envs();
+        let space = self.inner.single_observation_space();
+        let mut shape = vec![n];
+        shape.extend_from_slice(&space.shape);
+        let same_step = self.inner.autoreset_mode() == AutoresetMode::SameStep;
+        Arrays {
+            obs: ObsPy::new(py, &shape, space.dtype),
+            final_obs: same_step.then(|| ObsPy::new(py, &shape, space.dtype)),
+            rewards: PyArray1::zeros(py, n, false).unbind(),
+            terminated: PyArray1::zeros(py, n, false).unbind(),
+            truncated: PyArray1::zeros(py, n, false).unbind(),
+            fuel: PyArray1::zeros(py, n, false).unbind(),
+            lives: PyArray1::zeros(py, n, false).unbind(),
+            cause: PyArray1::zeros(py, n, false).unbind(),
+        }
+    }
+
+    /// Runs `f` on the output arrays (fresh ones with `copy`) with the GIL released; returns the arrays as
+    /// `(obs, rewards, terminated, truncated, fuel, lives, cause, final_obs | None)`.
+    fn run<'py>(
+        &mut self,
+        py: Python<'py>,
+        f: impl FnOnce(&mut VectorEnv, BatchMut<'_>) -> PyResult<()> + Send,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        if self.copy || self.arrays.is_none() {
+            self.arrays = Some(self.new_arrays(py));
+        }
+        let a = self.arrays.as_ref().expect("arrays were just made");
+        let mut obs = a.obs.borrow(py)?;
+        let mut final_obs = a.final_obs.as_ref().map(|f| f.borrow(py)).transpose()?;
+        let (mut rewards, mut terminated, mut truncated) =
+            (rw(&a.rewards, py)?, rw(&a.terminated, py)?, rw(&a.truncated, py)?);
+        let (mut fuel, mut lives, mut cause) = (rw(&a.fuel, py)?, rw(&a.lives, py)?, rw(&a.cause, py)?);
+        let contiguous = "the binding's own arrays are contiguous";
+        let batch = BatchMut {
+            observations: obs.as_buf_mut(),
+            rewards: rewards.as_slice_mut().expect(contiguous),
+            terminated: terminated.as_slice_mut().expect(contiguous),
+            truncated: truncated.as_slice_mut().expect(contiguous),
+            fuel: fuel.as_slice_mut().expect(contiguous),
+            lives: lives.as_slice_mut().expect(contiguous),
+            cause: cause.as_slice_mut().expect(contiguous),
+            final_observations: final_obs.as_mut().map(ObsRw::as_buf_mut),
+        };
+        let inner = &mut self.inner;
+        py.detach(|| f(inner, batch))?;
+        drop((obs, final_obs, rewards, terminated, truncated, fuel, lives, cause));
+        PyTuple::new(
+            py,
+            [
+                a.obs.bind(py),
+                a.rewards.bind(py).clone().into_any(),
+                a.terminated.bind(py).clone().into_any(),
+                a.truncated.bind(py).clone().into_any(),
+                a.fuel.bind(py).clone().into_any(),
+                a.lives.bind(py).clone().into_any(),
+                a.cause.bind(py).clone().into_any(),
+                a.final_obs.as_ref().map_or_else(|| py.None().into_bound(py), |f| f.bind(py)),
+            ],
+        )
+    }
+}
+
+#[pymethods]
+impl PyVectorEnv {
+    #[new]
+    #[pyo3(signature = (num_envs, num_threads = 1, options = None, same_step = false, copy = true, time_limit = None))]
+    fn new(
+        num_envs: usize,
+        num_threads: usize,
+        options: Option<&Bound<'_, PyDict>>,
+        same_step: bool,
+        copy: bool,
+        time_limit: Option<u32>,
+    ) -> PyResult<PyVectorEnv> {
+        let config = config_from(options)?;
+        let mode = if same_step { AutoresetMode::SameStep } else { AutoresetMode::NextStep };
+        let mut inner = VectorEnv::with_mode(config, num_envs, num_threads, mode).map_err(env_error)?;
+        inner.set_time_limit(time_limit).map_err(env_error)?;
+        Ok(PyVectorEnv { inner, copy, arrays: None })
+    }
+
+    /// Resets every environment: `seed` gives environment `i` the seed `seed + i`; `None` continues each
+    /// stream. Returns the output arrays (see the class).
+    #[pyo3(signature = (seed = None))]
+    fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
+        self.run(py, |v, out| v.reset_into(seed, out).map_err(batch_error))
+    }
+
+    /// Resets every environment, environment `i` with `seeds[i]` (`None` continues its stream).
+    fn reset_seeds<'py>(&mut self, py: Python<'py>, seeds: Vec<Option<u64>>) -> PyResult<Bound<'py, PyTuple>> {
+        self.run(py, move |v, out| v.reset_seeds_into(&seeds, out).map_err(batch_error))
+    }
+
+    /// Steps every environment; `actions` is a contiguous `int64` array of `num_envs` actions.
+    fn step<'py>(&mut self, py: Python<'py>, actions: PyReadonlyArray1<'py, i64>) -> PyResult<Bound<'py, PyTuple>> {
+        let actions = actions.as_slice().map_err(|e| PyValueError::new_err(format!("actions: {e}")))?;
+        self.run(py, |v, out| v.step_into(actions, out).map_err(batch_error))
+    }
+
+    /// The full 600 × 800 × 3 frame of environment `i`.
+    fn render<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        let env = self.env(i)?;
+        let frame = PyArray3::<u8>::zeros(py, [600, 800, 3], false);
+        // SAFETY: `frame` was just created and is not shared yet.
+        let rgb = unsafe { frame.as_slice_mut() }.expect("a fresh array is contiguous");
+        py.detach(|| env.render_into(rgb)).map_err(env_error)?;
+        Ok(frame)
+    }
+
+    /// Snapshot bytes of environment `i` (what `chopperscape._core.Env.from_snapshot` reads).
+    fn snapshot<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyBytes>> {
+        Ok(PyBytes::new(py, &Snapshot::to_bytes(&self.env(i)?.snapshot())))
+    }
+
+    /// Number of environments.
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.inner.num_envs()
+    }
+
+    /// Worker threads a batch is split over.
+    #[getter]
+    fn num_threads(&self) -> usize {
+        self.inner.num_threads()
+    }
+
+    /// Shape of one environment's observation.
+    #[getter]
+    fn obs_shape(&self) -> Vec<usize> {
+        self.inner.single_observation_space().shape.clone()
+    }
+
+    /// numpy name of the observation's element type.
+    #[getter]
+    fn obs_dtype(&self) -> &'static str {
+        self.inner.single_observation_space().dtype.as_str()
+    }
+
+    /// Lower bound of each element of one observation, flat.
+    #[getter]
+    fn obs_low<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        PyArray1::from_slice(py, &self.inner.single_observation_space().low)
+    }
+
+    /// Upper bound of each element of one observation, flat.
+    #[getter]
+    fn obs_high<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        PyArray1::from_slice(py, &self.inner.single_observation_space().high)
+    }
+
+    /// Fuel at reset (the `max_fuel` option).
+    #[getter]
+    fn max_fuel(&self) -> u32 {
+        self.inner.config().max_fuel
+    }
+
+    /// Lives at reset (the `lives` option).
+    #[getter]
+    fn lives(&self) -> u32 {
+        self.inner.config().lives
+    }
+}
+
+impl PyVectorEnv {
+    fn env(&self, i: usize) -> PyResult<&chopperscape::ChopperScape> {
+        if i >= self.inner.num_envs() {
+            return Err(PyIndexError::new_err(format!(
+                "environment {i} does not exist: num_envs is {}",
+                self.inner.num_envs()
+            )));
+        }
+        Ok(self.inner.env(i))
+    }
+}
