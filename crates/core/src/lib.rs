@@ -41,9 +41,11 @@ pub mod features;
 mod geometry;
 mod observation;
 mod observe;
+pub mod policy;
 pub mod render;
 mod rng;
 mod rules;
+mod snapshot;
 mod spaces;
 mod world;
 
@@ -56,5 +58,6 @@ pub use observation::{ObsBufMut, ObsData, Observation};
 pub use observe::luma;
 pub use rng::Rng;
 pub use rules::{Game, Outcome};
+pub use snapshot::{SNAPSHOT_VERSION, Snapshot};
 pub use spaces::{BoxSpace, Discrete, Dtype};
 pub use world::{Alien, Cause, Status, World};

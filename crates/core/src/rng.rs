@@ -100,7 +100,7 @@ mod tests {
         // Pinned values: a change here changes every trajectory, which is a new env version.
         let mut r = Rng::seed_from_u64(0);
         let firsts: Vec<i32> = (0..6).map(|_| r.range(40, 80)).collect();
-        assert_eq!(firsts, [47, 42, 58, 58, 64, 71]);
+        assert_eq!(firsts, [52, 55, 54, 40, 59, 40]);
     }
 
     #[test]
