@@ -1,3 +1,79 @@
-//! The `chopperscape` command line.
+//! The `chopperscape` command line: watch, play, record, replay and benchmark ChopperScape-v0.
+//!
+//! Every command is one file under `commands/`; the game options of SPEC.md are one shared struct
+//! ([`options::GameOptions`]) mapped onto [`chopperscape::Config`] through `Config::set`, so every error names
+//! the option and its range. Usage errors (bad flags, bad values) exit with code 2, other failures with 1.
 
-fn main() {}
+mod actionlog;
+mod commands;
+mod episode;
+mod media;
+mod options;
+mod output;
+mod overlay;
+mod progress;
+#[cfg(feature = "window")]
+mod window;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// ChopperScape-v0 from the command line.
+#[derive(Parser, Debug)]
+#[command(name = "chopperscape", version, about, long_about = None)]
+#[command(after_help = "Examples:\n  chopperscape demo\n  chopperscape play --lives 3\n  \
+chopperscape record --policy heuristic --seed 7 --out run.gif\n  chopperscape bench --json")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    Demo(commands::demo::DemoArgs),
+    Play(commands::play::PlayArgs),
+    Record(commands::record::RecordArgs),
+    Replay(commands::replay::ReplayArgs),
+    Bench(commands::bench::BenchArgs),
+    Web(commands::web::WebArgs),
+}
+
+/// An error in how the command was called (exit code 2), as opposed to a failure while running it (exit code 1).
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// Returns early with a [`UsageError`].
+#[macro_export]
+macro_rules! usage_bail {
+    ($($arg:tt)*) => {
+        return Err(anyhow::Error::new($crate::UsageError(format!($($arg)*))))
+    };
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(a) => commands::demo::run(a),
+        Command::Play(a) => commands::play::run(a),
+        Command::Record(a) => commands::record::run(a),
+        Command::Replay(a) => commands::replay::run(a),
+        Command::Bench(a) => commands::bench::run(a),
+        Command::Web(a) => commands::web::run(a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            if err.downcast_ref::<UsageError>().is_some() { ExitCode::from(2) } else { ExitCode::FAILURE }
+        }
+    }
+}

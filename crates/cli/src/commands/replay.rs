@@ -1,0 +1,106 @@
+//! `chopperscape replay`: re-run a saved action log, check it reproduces, and optionally render it.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Result, bail};
+use chopperscape::Config;
+use clap::Args;
+
+use super::record::RecordOutputs;
+use crate::episode::{EpisodeResult, replay_actions};
+use crate::media::{Recorder, open_frames, open_video};
+use crate::{actionlog, progress, usage_bail};
+
+/// Re-run a saved action log and check that it reproduces its recorded length, return and end exactly.
+///
+/// Exits with 1 and says what differs when it does not. Renders like `record` with --out or --frames.
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:\n  chopperscape replay my-run.json\n  \
+chopperscape replay my-run.json --out my-run.gif\n  chopperscape replay my-run.json --json")]
+pub struct ReplayArgs {
+    /// The action log (written by play, record or demo --save-actions)
+    pub file: PathBuf,
+    /// Print the replayed episode as one JSON line
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub outputs: RecordOutputs,
+}
+
+/// Runs `replay`.
+pub fn run(args: ReplayArgs) -> Result<ExitCode> {
+    if args.outputs.save_actions.is_some() {
+        usage_bail!("replay reads an action log; --save-actions does not apply (copy the file instead)");
+    }
+    args.outputs.check()?;
+    let log = actionlog::read(&args.file)?;
+    let bar = progress::bar(u64::from(log.steps) + 1, "replaying", args.json);
+    let mut recorder = recorder(&args.outputs, log.steps + 1)?;
+    let got = replay_actions(&log.config, log.seed, &log.actions, |env| {
+        bar.inc(1);
+        recorder.push(env)
+    });
+    bar.finish_and_clear();
+    let got = got.map_err(|e| e.context(format!("{} does not replay", args.file.display())))?;
+    if got.steps != log.steps || got.ret != log.ret || got.cause.map(String::from) != log.cause {
+        bail!(
+            "{} does not reproduce: the log records {} steps, return {}, end {}; the replay gives {} steps, \
+             return {}, end {}",
+            args.file.display(),
+            log.steps,
+            log.ret,
+            log.cause.as_deref().unwrap_or("running"),
+            got.steps,
+            got.ret,
+            got.cause.unwrap_or("running")
+        );
+    }
+    recorder.finish()?;
+    if args.json {
+        println!("{}", serde_json::to_string(&got)?);
+    } else {
+        println!(
+            "{} ({} playing) reproduces: {} steps, return {}, end {}",
+            args.file.display(),
+            log.policy.as_deref().unwrap_or("unknown pilot"),
+            got.steps,
+            got.ret,
+            got.cause.unwrap_or("running (stopped before the end)")
+        );
+    }
+    for (what, path) in [("video", &args.outputs.out), ("frames", &args.outputs.frames)] {
+        if let Some(p) = path {
+            let msg = format!("wrote {what}: {}", p.display());
+            if args.json { eprintln!("{msg}") } else { println!("{msg}") }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The sinks `outputs` asks for (none for an action log alone).
+fn recorder(outputs: &RecordOutputs, frames: u32) -> Result<Recorder> {
+    let mut sinks = Vec::new();
+    if let Some(out) = &outputs.out {
+        sinks.push(open_video(out, frames, outputs.force)?);
+    }
+    if let Some(dir) = &outputs.frames {
+        sinks.push(open_frames(dir, outputs.force)?);
+    }
+    Ok(Recorder::new(sinks))
+}
+
+/// Draws `episode` into the video and frame outputs of `outputs` (for `record`).
+pub fn render(config: &Config, episode: &EpisodeResult, outputs: &RecordOutputs) -> Result<()> {
+    let mut recorder = recorder(outputs, episode.steps + 1)?;
+    if recorder.is_empty() {
+        return Ok(());
+    }
+    let bar = progress::bar(u64::from(episode.steps) + 1, "recording", false);
+    replay_actions(config, episode.seed, &episode.actions, |env| {
+        bar.inc(1);
+        recorder.push(env)
+    })?;
+    bar.finish_and_clear();
+    recorder.finish()
+}

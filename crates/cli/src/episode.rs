@@ -1,0 +1,170 @@
+//! Playing one episode headless: with a built-in policy, or from a list of actions.
+//!
+//! The env observes the cheap `features` vector (nothing is drawn); a caller that records asks the env for the
+//! full frame through the `frame` callback, which runs after `reset` and after every step.
+
+use anyhow::{Context, Result, bail};
+use chopperscape::{ChopperScape, Config, ObsBufMut, ObsType, Status, policy};
+use serde::Serialize;
+
+/// What one episode came to.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct EpisodeResult {
+    /// The seed of `reset`.
+    pub seed: u64,
+    /// Agent steps taken.
+    pub steps: u32,
+    /// The episode return (sum of rewards).
+    #[serde(rename = "return")]
+    pub ret: i64,
+    /// `"bird"`, `"fuel"`, `"truncated"`, or `None` while the episode still runs.
+    pub cause: Option<&'static str>,
+    /// Every action taken, in order.
+    #[serde(skip)]
+    pub actions: Vec<u8>,
+    /// Chopper top-left corner `[x, y]` after reset.
+    pub start: (i32, i32),
+    /// Chopper top-left corner `[x, y]` now (at the end of the episode).
+    pub chopper: (i32, i32),
+}
+
+/// One environment that observes features only, plus its observation buffer.
+pub struct Runner {
+    env: ChopperScape,
+    obs: Vec<f32>,
+    seed: u64,
+    actions: Vec<u8>,
+    start: (i32, i32),
+}
+
+impl Runner {
+    /// An environment with `config`'s rules; its observation is switched to `features` (nothing is drawn).
+    pub fn new(config: &Config) -> Result<Runner> {
+        let config = Config { obs_type: ObsType::Features, frame_stack: 1, ..config.clone() };
+        let env = ChopperScape::new(config).context("invalid game options")?;
+        let obs = vec![0.0; env.obs_len()];
+        Ok(Runner { env, obs, seed: 0, actions: Vec::new(), start: (0, 0) })
+    }
+
+    /// Starts an episode with `seed`.
+    pub fn reset(&mut self, seed: u64) {
+        self.env.reset_into(Some(seed), ObsBufMut::F32(&mut self.obs)).expect("the buffer has the env's own length");
+        self.seed = seed;
+        self.actions.clear();
+        let c = self.env.world().chopper;
+        self.start = (c.x, c.y);
+    }
+
+    /// Takes one action (0..=4).
+    ///
+    /// # Errors
+    /// An invalid action, or a step after the episode ended.
+    pub fn step(&mut self, action: u8) -> Result<()> {
+        self.env.step_into(i64::from(action), ObsBufMut::F32(&mut self.obs))?;
+        self.actions.push(action);
+        Ok(())
+    }
+
+    /// Whether the episode has ended.
+    pub fn is_over(&self) -> bool {
+        self.env.world().status.is_over()
+    }
+
+    /// The environment (to read the world or render a frame).
+    pub fn env(&self) -> &ChopperScape {
+        &self.env
+    }
+
+    /// The episode so far.
+    pub fn result(&self) -> EpisodeResult {
+        let w = self.env.world();
+        EpisodeResult {
+            seed: self.seed,
+            steps: w.steps,
+            ret: w.episode_return,
+            cause: cause_of(w.status),
+            actions: self.actions.clone(),
+            start: self.start,
+            chopper: (w.chopper.x, w.chopper.y),
+        }
+    }
+}
+
+/// The JSON name of how an episode ended, if it has.
+pub fn cause_of(status: Status) -> Option<&'static str> {
+    match status {
+        Status::Terminated(c) => Some(c.as_str()),
+        Status::Truncated => Some("truncated"),
+        Status::NotStarted | Status::Running => None,
+    }
+}
+
+/// Plays one whole episode with the built-in policy `name`, whose own generator (for `random`) is seeded with
+/// `seed` too. `frame` sees the env after reset and after every step.
+///
+/// # Errors
+/// An unknown policy, or an error from `frame`.
+pub fn play_policy(
+    config: &Config,
+    name: &str,
+    seed: u64,
+    mut frame: impl FnMut(&ChopperScape) -> Result<()>,
+) -> Result<EpisodeResult> {
+    let mut pilot = policy::by_name(name, seed).map_err(anyhow::Error::msg)?;
+    let mut runner = Runner::new(config)?;
+    runner.reset(seed);
+    frame(runner.env())?;
+    while !runner.is_over() {
+        let action = pilot.act(runner.env().world());
+        runner.step(action as u8)?;
+        frame(runner.env())?;
+    }
+    Ok(runner.result())
+}
+
+/// Re-plays `actions` from `reset(seed)`.
+///
+/// # Errors
+/// An action outside 0..=4, actions left after the episode ended, or an error from `frame`.
+pub fn replay_actions(
+    config: &Config,
+    seed: u64,
+    actions: &[u8],
+    mut frame: impl FnMut(&ChopperScape) -> Result<()>,
+) -> Result<EpisodeResult> {
+    let mut runner = Runner::new(config)?;
+    runner.reset(seed);
+    frame(runner.env())?;
+    for (i, &a) in actions.iter().enumerate() {
+        if runner.is_over() {
+            bail!("the episode ended after {i} steps but the log has {} actions", actions.len());
+        }
+        runner.step(a).with_context(|| format!("action {i}"))?;
+        frame(runner.env())?;
+    }
+    Ok(runner.result())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replaying_a_policy_episode_reproduces_it() {
+        let config = Config::default();
+        let played = play_policy(&config, "random", 5, |_| Ok(())).unwrap();
+        assert!(played.cause.is_some());
+        assert_eq!(played.actions.len(), played.steps as usize);
+        let replayed = replay_actions(&config, 5, &played.actions, |_| Ok(())).unwrap();
+        assert_eq!(replayed, played);
+    }
+
+    #[test]
+    fn actions_past_the_end_are_refused() {
+        let config = Config::default();
+        let mut actions = play_policy(&config, "noop", 1, |_| Ok(())).unwrap().actions;
+        actions.push(4);
+        let err = replay_actions(&config, 1, &actions, |_| Ok(())).unwrap_err().to_string();
+        assert!(err.contains("episode ended"), "{err}");
+    }
+}

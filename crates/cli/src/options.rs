@@ -1,0 +1,121 @@
+//! The game options of SPEC.md as command-line flags, shared by every command that plays.
+//!
+//! Each flag is checked while parsing by `Config::set` on its SPEC name, so a bad value fails with clap's usage
+//! error (exit code 2) and the core's message naming the option and its allowed range.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use chopperscape::Config;
+use clap::Args;
+
+/// A clap value parser that accepts exactly what `Config::set(name, value)` accepts.
+fn option(name: &'static str) -> impl Fn(&str) -> Result<String, String> + Clone + Send + Sync + 'static {
+    move |value: &str| {
+        Config::default().set(name, value).map_err(|e| e.to_string())?;
+        Ok(value.to_string())
+    }
+}
+
+/// The options of SPEC.md ("Options beyond the tutorial"); each defaults to the v0 rules.
+#[derive(Args, Debug, Clone, Default)]
+#[command(next_help_heading = "Game options (SPEC.md; the defaults are the v0 rules)")]
+pub struct GameOptions {
+    /// Lives per episode, 1..=1000 [default: 1]
+    #[arg(long, value_name = "L", value_parser = option("lives"))]
+    pub lives: Option<String>,
+    /// Probability per step that an alien bird appears, in [0, 1] [default: 0]
+    #[arg(long, value_name = "P", value_parser = option("alien_prob"))]
+    pub aliens: Option<String>,
+    /// What a bird and a fuel tank that collide do: pass or destroy [default: pass]
+    #[arg(long, value_name = "pass|destroy", value_parser = option("bird_fuel_collision"))]
+    pub bird_fuel_collision: Option<String>,
+    /// Steps each action is repeated for, 1..=1000 [default: 1]
+    #[arg(long, value_name = "K", value_parser = option("frame_skip"))]
+    pub frame_skip: Option<String>,
+    /// Probability that the previous action is applied instead of the new one, in [0, 1] [default: 0]
+    #[arg(long, value_name = "P", value_parser = option("sticky_prob"))]
+    pub sticky: Option<String>,
+    /// Probability per step that a bird appears, in [0, 1] [default: 0.01]
+    #[arg(long, value_name = "P", value_parser = option("bird_prob"))]
+    pub bird_prob: Option<String>,
+    /// Probability per step that a fuel tank appears, in [0, 1] [default: 0.01]
+    #[arg(long, value_name = "P", value_parser = option("fuel_prob"))]
+    pub fuel_prob: Option<String>,
+    /// Fuel at reset and after a refill, 1..=1000000 [default: 1000]
+    #[arg(long, value_name = "N", value_parser = option("max_fuel"))]
+    pub max_fuel: Option<String>,
+    /// Agent steps after which an episode is truncated, or `none` [default: 10000]
+    #[arg(long, value_name = "N|none", value_parser = option("max_episode_steps"))]
+    pub max_episode_steps: Option<String>,
+}
+
+impl GameOptions {
+    /// The flags that were given, as `(Config::set name, value)`.
+    pub fn given(&self) -> Vec<(&'static str, &str)> {
+        [
+            ("lives", &self.lives),
+            ("alien_prob", &self.aliens),
+            ("bird_fuel_collision", &self.bird_fuel_collision),
+            ("frame_skip", &self.frame_skip),
+            ("sticky_prob", &self.sticky),
+            ("bird_prob", &self.bird_prob),
+            ("fuel_prob", &self.fuel_prob),
+            ("max_fuel", &self.max_fuel),
+            ("max_episode_steps", &self.max_episode_steps),
+        ]
+        .into_iter()
+        .filter_map(|(name, v)| v.as_deref().map(|v| (name, v)))
+        .collect()
+    }
+
+    /// `base` with these options applied.
+    ///
+    /// # Errors
+    /// A value `Config::set` refuses (already checked while parsing, so only in theory).
+    pub fn apply(&self, mut base: Config) -> Result<Config> {
+        for (name, value) in self.given() {
+            base.set(name, value).with_context(|| format!("option {name}"))?;
+        }
+        Ok(base)
+    }
+}
+
+/// Every rules option of `config` as `Config::set` name → value text (what an action log stores).
+pub fn rule_values(config: &Config) -> BTreeMap<String, String> {
+    let steps = config.max_episode_steps.map_or_else(|| "none".to_string(), |n| n.to_string());
+    [
+        ("lives", config.lives.to_string()),
+        ("bird_fuel_collision", config.bird_fuel_collision.as_str().to_string()),
+        ("alien_prob", config.alien_prob.to_string()),
+        ("frame_skip", config.frame_skip.to_string()),
+        ("sticky_prob", config.sticky_prob.to_string()),
+        ("bird_prob", config.bird_prob.to_string()),
+        ("fuel_prob", config.fuel_prob.to_string()),
+        ("max_fuel", config.max_fuel.to_string()),
+        ("max_episode_steps", steps),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rule_values_round_trip_through_config_set() {
+        let mut c = Config::features();
+        for (n, v) in [("lives", "3"), ("alien_prob", "0.125"), ("sticky_prob", "0.1"), ("max_episode_steps", "none")] {
+            c.set(n, v).unwrap();
+        }
+        let values = rule_values(&c);
+        assert_eq!(values.len(), 9);
+        let mut back = Config::features();
+        for (n, v) in &values {
+            back.set(n, v).unwrap();
+        }
+        assert_eq!(back, c);
+    }
+}
