@@ -240,3 +240,7 @@ fn destroy_colliding(tanks: &mut Vec<Rect>, birds: &mut Vec<Rect>, aliens: &mut 
         tanks.remove(i);
     }
 }
+
+#[cfg(test)]
+#[path = "rules_tests.rs"]
+mod tests;
