@@ -1,0 +1,29 @@
+"""ChopperScape-v0 for Gymnasium: a Rust game behind a `gymnasium.Env` and a native `gymnasium.vector.VectorEnv`.
+
+Importing the package registers `ChopperScape-v0`:
+
+>>> import gymnasium as gym, chopperscape
+>>> env = gym.make("ChopperScape-v0", obs_type="features")
+>>> envs = gym.make_vec("ChopperScape-v0", num_envs=8, vectorization_mode="vector_entry_point", obs_type="features")
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+from . import _core
+from .env import ChopperScapeEnv
+from .vector import VectorEnv
+
+__all__ = ["ChopperScapeEnv", "VectorEnv", "ACTION_MEANINGS", "OPTION_NAMES", "__version__"]
+__version__ = _core.__version__
+ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
+OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
+
+if "ChopperScape-v0" not in registry:
+    register(
+        id="ChopperScape-v0",
+        entry_point="chopperscape.env:ChopperScapeEnv",
+        vector_entry_point="chopperscape.vector:VectorEnv",
+        max_episode_steps=10_000,
+    )

@@ -1,0 +1,194 @@
+"""`ChopperScapeEnv`: the Gymnasium environment, a thin layer over the Rust core (`chopperscape._core.Env`)."""
+
+from __future__ import annotations
+
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from . import _core
+from ._spaces import core_seed, observation_box
+
+
+class ChopperScapeEnv(gym.Env):
+    """ChopperScape-v0: fly a helicopter through a sky of birds, refuelling from rising fuel tanks.
+
+    ## Description
+    The game of the "ChopperScape" Gymnasium tutorial, made exact (see `docs/SPEC.md`). The chopper flies in a
+    band of the 800 × 600 screen; birds appear at the right edge and fly left; fuel tanks rise from the bottom.
+    Every step burns one unit of fuel; touching a fuel tank refills it; touching a bird ends the episode.
+    The game runs in Rust; every step is one call into it.
+
+    ## Action Space
+    `Discrete(5)`:
+
+    | Num | Action     | Effect |
+    |-----|------------|--------|
+    | 0   | Right      | x += 5 |
+    | 1   | Left       | x −= 5 |
+    | 2   | Down       | y += 5 |
+    | 3   | Up         | y −= 5 |
+    | 4   | Do Nothing | —      |
+
+    ## Observation Space
+    Chosen by `obs_type`:
+    - `"rgb"` (default): `Box(0, 255, (H, W, 3), uint8)`, the rendered frame, HUD included;
+    - `"rgb_float"`: `Box(0, 1, (H, W, 3), float32)`;
+    - `"grayscale"`: `Box(0, 255, (H, W), uint8)`;
+    - `"features"`: `Box(low, high, (34,), float32)`, a description of the state:
+
+    | Index | Name | Min | Max |
+    |-------|------|-----|-----|
+    | 0 | chopper x, `(x − 0) / 736` | 0 | 1 |
+    | 1 | chopper y, `(y − 60) / 416` | 0 | 1 |
+    | 2 | fuel left / max_fuel | 0 | 1 |
+    | 3 | lives left / lives | 0 | 1 |
+    | 4–15 | 4 nearest birds: present, dx / 800, dy / 480 (centre to centre) | 0, −1, −1 | 1, 1, 1 |
+    | 16–21 | 2 nearest fuel tanks: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
+    | 22–27 | 2 nearest alien birds: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
+    | 28–33 | 2 nearest missiles: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
+
+    `obs_size=(H, W)` (default `(600, 800)`) draws pixel observations at that size; `frame_stack=k` stacks the
+    last `k` observations on the last axis (`(34·k,)` for features).
+
+    ## Rewards
+    +1 for every step; −10 for a step in which a bird (or alien, or missile) hits the chopper. With
+    `frame_skip=k` the rewards of the repeated steps are summed.
+
+    ## Starting State
+    Fuel `max_fuel` (1000); no birds, no tanks; the chopper at x uniform in [40, 80), y uniform in [90, 120).
+
+    ## Episode End
+    Termination: a bird hits the chopper with no life left to lose (`info["cause"] == "bird"`), or the fuel runs
+    out (`info["cause"] == "fuel"`).
+
+    Truncation: after 10,000 steps, by Gymnasium's `TimeLimit` wrapper that `gymnasium.make` adds
+    (`max_episode_steps=10000`). The class itself never truncates.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import chopperscape
+    env = gym.make("ChopperScape-v0", obs_type="grayscale", obs_size=(84, 84), render_mode="rgb_array")
+    ```
+
+    | Argument | Default | Allowed |
+    |----------|---------|---------|
+    | `obs_type` | `"rgb"` | `"rgb"`, `"rgb_float"`, `"grayscale"`, `"features"` |
+    | `obs_size` | `(600, 800)` | `(H, W)`, each in 8..=4096 |
+    | `frame_stack` | 1 | 1..=64 |
+    | `hud` | `True` | draw the HUD line into pixel observations |
+    | `lives` | 1 | 1..=1000 |
+    | `bird_fuel_collision` | `"pass"` | `"pass"`, `"destroy"` |
+    | `alien_prob` | 0 | [0, 1] |
+    | `frame_skip` | 1 | 1..=1000 |
+    | `sticky_prob` | 0 | [0, 1] |
+    | `bird_prob` | 0.01 | [0, 1] |
+    | `fuel_prob` | 0.01 | [0, 1] |
+    | `max_fuel` | 1000 | 1..=1000000 |
+    | `render_mode` | `None` | `None`, `"rgb_array"` (600 × 800 × 3 frames), `"human"` (a pygame window) |
+
+    An unknown option or a value out of range raises `ValueError` naming the option and its range.
+
+    ## Seeding
+    `reset(seed=s)` seeds the game's generator with `s` (the same trajectory as the Rust `reset(Some(s))`);
+    `reset()` continues the stream; the first `reset()` without any seed draws one from `np_random`, which
+    Gymnasium seeds from OS entropy.
+
+    ## Version History
+    - v0: the tutorial's game with its contradictions resolved as SPEC.md states.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": _core.RENDER_FPS}
+
+    def __init__(self, render_mode: str | None = None, **options: Any):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"invalid value {render_mode!r} for option `render_mode`: allowed None, 'human', 'rgb_array'"
+            )
+        if "max_episode_steps" in options:
+            raise ValueError(
+                "option `max_episode_steps` belongs to gymnasium.make(..., max_episode_steps=N) (the TimeLimit "
+                "wrapper), not to the environment"
+            )
+        self._options = dict(options)
+        self._core = _core.Env({**options, "max_episode_steps": None})
+        self.render_mode = render_mode
+        self.action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
+        self.observation_space = observation_box(self._core)
+        self._stream_started = False
+        self._window = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Starts an episode. `seed` reseeds; no seed continues the stream (see Seeding). `options` is unused."""
+        super().reset(seed=seed)
+        if seed is not None:
+            core = core_seed(seed)
+        elif not self._stream_started:
+            core = int(self.np_random.integers(0, 2**63))
+        else:
+            core = None
+        result = self._core.reset(core)
+        self._stream_started = True
+        if self.render_mode == "human":
+            self.render()
+        return result
+
+    def step(self, action: Any) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
+        """One step: `(obs, reward: float, terminated: bool, truncated: bool, info)`."""
+        result = self._core.step(action)
+        if self.render_mode == "human":
+            self.render()
+        return result
+
+    def render(self) -> np.ndarray | None:
+        """The 600 × 800 × 3 frame (`"rgb_array"`), or shows it in a window (`"human"`)."""
+        if self.render_mode is None:
+            gym.logger.warn(
+                "You are calling render method without specifying any render mode. "
+                'You can specify the render_mode at initialization, e.g. gym.make("ChopperScape-v0", '
+                'render_mode="rgb_array")'
+            )
+            return None
+        frame = self._core.render()
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:
+            from ._human import HumanWindow
+
+            self._window = HumanWindow(self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        """Closes the window, if any. Calling it again is fine."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+    def get_action_meanings(self) -> list[str]:
+        """The name of each action, by index: `["Right", "Left", "Down", "Up", "Do Nothing"]`."""
+        return list(_core.ACTION_MEANINGS)
+
+    def get_keys_to_action(self) -> dict[tuple[str, ...], int]:
+        """Keys for `gymnasium.utils.play.play`: W A S D move, and no key is action 4 (pass `noop=4` to `play`)."""
+        return {("d",): 0, ("a",): 1, ("s",): 2, ("w",): 3}
+
+    def clone_state(self) -> bytes:
+        """The whole game state (options included) as bytes: keep it, save it, restore it later."""
+        return self._core.snapshot()
+
+    def restore_state(self, state: bytes) -> None:
+        """Restores a state from `clone_state()`; `ValueError` for bytes that are not a snapshot of this
+        environment's options. The environment then continues exactly as it would have from that state."""
+        self._core.restore(bytes(state))
+        self._stream_started = True
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_window"] = None
+        return state

@@ -1,0 +1,219 @@
+"""`VectorEnv`: N ChopperScape environments stepped by one Rust call, as a `gymnasium.vector.VectorEnv`."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+
+from . import _core
+from ._spaces import core_seed, observation_box
+
+_CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
+
+
+def default_threads(num_envs: int) -> int:
+    """The CPUs this process may use, at most one thread per 64 environments (a thread costs ~20 µs a batch)."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, num_envs // 64))
+
+
+class VectorEnv(gym.vector.VectorEnv):
+    """`num_envs` ChopperScape-v0 environments stepped together in Rust, over `num_threads` threads.
+
+    `gymnasium.make_vec("ChopperScape-v0", num_envs=N, vectorization_mode="vector_entry_point", ...)` builds one;
+    so does `chopperscape.VectorEnv(N, ...)`. It takes every option of `ChopperScapeEnv` as a keyword, and:
+
+    | Argument | Default | Meaning |
+    |----------|---------|---------|
+    | `num_threads` | CPUs, at most one per 64 envs | worker threads (results do not depend on it) |
+    | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, overwritten by the next `step`/`reset` (copy what you keep) |
+    | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
+    | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |
+    | `render_mode` | `None` | `"rgb_array"`: `render()` returns a tuple of 600 × 800 × 3 frames |
+
+    Environment `i` of a batch reset with `seed=s` follows the trajectory of a single `ChopperScape-v0` seeded
+    `s + i`, across autoresets (which continue each environment's own generator, as `reset()` does).
+
+    `step(actions)` takes `num_envs` integer actions in `0..=4`; a wrong shape, dtype or value raises
+    `ValueError` and moves no environment. Infos follow Gymnasium's vector convention: `info["fuel"]`,
+    `info["lives"]` (int64 arrays) with masks `info["_fuel"]`, `info["_lives"]`, and `info["cause"]` (an object
+    array of `"bird"`, `"fuel"` or `None`) with `info["_cause"]` when some episode terminated.
+    """
+
+    metadata = {
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+        "render_modes": ["rgb_array"],
+        "render_fps": _core.RENDER_FPS,
+    }
+
+    def __init__(
+        self,
+        num_envs: int,
+        num_threads: int | None = None,
+        copy: bool = True,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        max_episode_steps: int | None = 10_000,
+        render_mode: str | None = None,
+        **options: Any,
+    ):
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+            raise ValueError(f"invalid value {num_envs!r} for option `num_envs`: allowed an integer >= 1")
+        if num_threads is None:
+            num_threads = default_threads(int(num_envs))
+        if isinstance(num_threads, bool) or not isinstance(num_threads, (int, np.integer)) or num_threads < 1:
+            raise ValueError(f"invalid value {num_threads!r} for option `num_threads`: allowed an integer >= 1")
+        try:
+            autoreset_mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            autoreset_mode = None
+        if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
+            raise ValueError(
+                "invalid value for option `autoreset_mode`: allowed AutoresetMode.NEXT_STEP or AutoresetMode.SAME_STEP"
+            )
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"invalid value {render_mode!r} for option `render_mode`: allowed None, 'rgb_array'")
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, (int, np.integer))
+            or max_episode_steps < 1
+        ):
+            raise ValueError(
+                f"invalid value {max_episode_steps!r} for option `max_episode_steps`: allowed a positive integer or None"
+            )
+        self._core = _core.VectorEnv(
+            int(num_envs),
+            int(num_threads),
+            {**options, "max_episode_steps": None},
+            autoreset_mode == AutoresetMode.SAME_STEP,
+            bool(copy),
+            None if max_episode_steps is None else int(max_episode_steps),
+        )
+        self._options = dict(options)
+        self.num_envs = int(num_envs)
+        self.num_threads = self._core.num_threads
+        self.copy = bool(copy)
+        self.render_mode = render_mode
+        self.autoreset_mode = autoreset_mode
+        self.metadata = {**type(self).metadata, "autoreset_mode": autoreset_mode}
+        self.max_episode_steps = max_episode_steps
+        self.single_observation_space = observation_box(self._core)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.single_action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._stream_started = False
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Resets every environment. `seed=s` seeds environment `i` with `s + i`; a list gives each its own seed
+        (`None` continues that one's stream); no seed continues every stream (the first time, a seed is drawn
+        from `np_random`, itself seeded from OS entropy)."""
+        if options:
+            raise ValueError(
+                f"reset options {sorted(options)} are not supported: ChopperScape's reset takes no options "
+                "(a partial reset with options['reset_mask'] is not supported either)"
+            )
+        if isinstance(seed, (list, tuple)):
+            if len(seed) != self.num_envs:
+                raise ValueError(
+                    f"If seeds are passed as a list the length must match num_envs={self.num_envs} but got "
+                    f"length={len(seed)}."
+                )
+            out = self._core.reset_seeds([None if s is None else core_seed(s) for s in seed])
+        else:
+            if seed is not None:
+                super().reset(seed=seed)
+                core = core_seed(seed)
+            elif not self._stream_started:
+                core = int(self.np_random.integers(0, 2**63))
+            else:
+                core = None
+            out = self._core.reset(core)
+        self._stream_started = True
+        obs, _, _, _, fuel, lives, _, _ = out
+        return obs, self._infos(fuel, lives)
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Steps every environment; see the class docstring for autoreset and infos."""
+        actions = np.asarray(actions)
+        if actions.shape != (self.num_envs,):
+            raise ValueError(
+                f"actions must have shape ({self.num_envs},) (one action per environment), got {actions.shape}"
+            )
+        if actions.dtype.kind not in "iu":
+            raise ValueError(f"actions must be integers in 0..=4, got dtype {actions.dtype}")
+        if actions.dtype != np.int64:
+            if actions.dtype.kind == "u" and actions.size and actions.max() > 4:
+                bad = int(np.argmax(actions > 4))
+                raise ValueError(
+                    f"invalid action {actions[bad]} at index {bad}: allowed actions are 0..=4 "
+                    "(0 Right, 1 Left, 2 Down, 3 Up, 4 Do Nothing)"
+                )
+            actions = actions.astype(np.int64)
+        obs, rewards, terminated, truncated, fuel, lives, cause, final_obs = self._core.step(
+            np.ascontiguousarray(actions)
+        )
+        if final_obs is None:
+            infos = self._infos(fuel, lives, cause)
+        else:
+            infos = self._same_step_infos(final_obs, terminated | truncated, fuel, lives, cause)
+        return obs, rewards, terminated, truncated, infos
+
+    def _infos(self, fuel: np.ndarray, lives: np.ndarray, cause: np.ndarray | None = None) -> dict[str, Any]:
+        infos: dict[str, Any] = {
+            "fuel": fuel.astype(np.int64),
+            "_fuel": np.ones(self.num_envs, dtype=np.bool_),
+            "lives": lives.astype(np.int64),
+            "_lives": np.ones(self.num_envs, dtype=np.bool_),
+        }
+        if cause is not None and cause.any():
+            infos["cause"] = _CAUSES[cause]
+            infos["_cause"] = cause != 0
+        return infos
+
+    def _same_step_infos(
+        self, final_obs: np.ndarray, ended: np.ndarray, fuel: np.ndarray, lives: np.ndarray, cause: np.ndarray
+    ) -> dict[str, Any]:
+        if not ended.any():
+            return self._infos(fuel, lives)
+        # The ended environments were reset in this step: their info is the reset info.
+        infos = self._infos(
+            np.where(ended, self._core.max_fuel, fuel), np.where(ended, self._core.lives, lives)
+        )
+        objs = np.full(self.num_envs, None, dtype=object)
+        for i in np.flatnonzero(ended):
+            objs[i] = final_obs[i].copy()
+        final_info: dict[str, Any] = {
+            "fuel": np.where(ended, fuel, 0).astype(np.int64),
+            "_fuel": ended.copy(),
+            "lives": np.where(ended, lives, 0).astype(np.int64),
+            "_lives": ended.copy(),
+        }
+        if cause.any():
+            final_info["cause"] = _CAUSES[cause]
+            final_info["_cause"] = cause != 0
+        infos.update({"final_obs": objs, "_final_obs": ended.copy(), "final_info": final_info, "_final_info": ended.copy()})
+        return infos
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """`render_mode="rgb_array"`: one 600 × 800 × 3 frame per environment."""
+        if self.render_mode is None:
+            gym.logger.warn("You are calling render method without specifying any render mode.")
+            return None
+        return tuple(self._core.render(i) for i in range(self.num_envs))
+
+    def get_action_meanings(self) -> list[str]:
+        """The name of each action, by index."""
+        return list(_core.ACTION_MEANINGS)
+
+    def env_state(self, i: int) -> bytes:
+        """Environment `i`'s whole state as bytes: `ChopperScapeEnv.restore_state` reads them."""
+        return self._core.snapshot(i)
