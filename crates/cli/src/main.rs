@@ -10,6 +10,7 @@ mod episode;
 mod media;
 mod options;
 mod output;
+#[cfg(feature = "window")]
 mod overlay;
 mod progress;
 #[cfg(feature = "window")]

@@ -20,6 +20,21 @@ fn parent_of(dest: &Path) -> Result<PathBuf> {
     Ok(parent)
 }
 
+/// A temporary-file builder whose files get the usual permissions (0666, or 0777 for a folder, less the
+/// umask), not tempfile's private 0600, since they are renamed into the user's files.
+fn builder<'a>(prefix: &'a str, suffix: &'a str, folder: bool) -> tempfile::Builder<'a, 'a> {
+    let mut b = tempfile::Builder::new();
+    b.prefix(prefix).suffix(suffix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        b.permissions(std::fs::Permissions::from_mode(if folder { 0o777 } else { 0o666 }));
+    }
+    #[cfg(not(unix))]
+    let _ = folder;
+    b
+}
+
 /// Fails unless `dest` may be written: it does not exist, or `force` is set.
 pub fn check_free(dest: &Path, force: bool) -> Result<()> {
     if dest.exists() && !force {
@@ -44,9 +59,8 @@ impl PendingFile {
     pub fn create(dest: &Path, force: bool) -> Result<PendingFile> {
         check_free(dest, force)?;
         let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-        let tmp = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".part")
+        let prefix = format!(".{name}.");
+        let tmp = builder(&prefix, ".part", false)
             .tempfile_in(parent_of(dest)?)
             .with_context(|| format!("cannot create a temporary file beside {}", dest.display()))?;
         Ok(PendingFile { tmp, dest: dest.to_path_buf(), force })
@@ -97,9 +111,7 @@ impl PendingDir {
     /// and only if it holds nothing but numbered frames (so `--force` never deletes anything else).
     pub fn create(dest: &Path, force: bool) -> Result<PendingDir> {
         Self::check(dest, force)?;
-        let tmp = tempfile::Builder::new()
-            .prefix(".frames.")
-            .suffix(".part")
+        let tmp = builder(".frames.", ".part", true)
             .tempdir_in(parent_of(dest)?)
             .with_context(|| format!("cannot create a temporary folder beside {}", dest.display()))?;
         Ok(PendingDir { tmp, dest: dest.to_path_buf(), force })
@@ -167,6 +179,14 @@ mod tests {
         write_atomic(&dest, b"new", true).unwrap();
         assert_eq!(std::fs::read_to_string(&dest).unwrap(), "new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file is left");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let plain = dir.path().join("plain.txt");
+            std::fs::write(&plain, "x").unwrap();
+            let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode();
+            assert_eq!(mode(&dest), mode(&plain), "the file gets the permissions of any new file");
+        }
     }
 
     #[test]

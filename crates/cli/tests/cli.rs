@@ -124,7 +124,6 @@ fn record_writes_a_gif_an_apng_frames_and_an_action_log_that_replays() {
 
     cs().arg("replay").arg(p("run.json")).arg("--out").arg(p("replay.png")).assert().success();
     assert_eq!(apng_frames(&p("replay.png")), 41);
-    assert_eq!(std::fs::read(p("run.gif")).unwrap().len() > 1000, true);
 }
 
 #[test]

@@ -42,7 +42,7 @@ impl GifSink {
 /// The smallest rectangle `(left, top, width, height)` holding every pixel that differs, if any does.
 fn changed_rect(a: &[u8], b: &[u8]) -> Option<(usize, usize, usize, usize)> {
     let (w, h) = (W as usize, H as usize);
-    let row = |y: usize| &a[y * w * 3..(y + 1) * w * 3] != &b[y * w * 3..(y + 1) * w * 3];
+    let row = |y: usize| a[y * w * 3..(y + 1) * w * 3] != b[y * w * 3..(y + 1) * w * 3];
     let top = (0..h).find(|&y| row(y))?;
     let bottom = (0..h).rev().find(|&y| row(y))?;
     let (mut left, mut right) = (w, 0);
