@@ -1,7 +1,18 @@
 #!/usr/bin/env bash
-# The Rust tests of every crate: unit, property, golden and integration tests.
+# Formatting, lints, and the Rust tests of every crate (unit, property, golden and integration tests).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 cd "$ROOT"
-cargo test --workspace --quiet 2>&1 | grep -vE '^(running 0 tests|test result: ok. 0 passed.*|)$' || true
-test "${PIPESTATUS[0]}" -eq 0
+cargo fmt --all -- --check
+quiet cargo clippy --workspace --all-targets -- -D warnings
+log="$(mktemp)"
+status=0
+cargo test --workspace --quiet >"$log" 2>&1 || status=$?
+# Keep the runner's summary lines (and everything on failure); drop the progress dots.
+if [ "$status" -ne 0 ]; then
+  cat "$log"
+else
+  grep -E '^test result:' "$log" | grep -v ' 0 passed; 0 failed; 0 ignored; 0 measured' || true
+fi
+rm -f "$log"
+exit "$status"
