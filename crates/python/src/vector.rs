@@ -16,7 +16,8 @@ use crate::options::config_from;
 struct Arrays {
     obs: ObsPy,
     final_obs: Option<ObsPy>,
-    rewards: Py<PyArray1<f32>>,
+    /// `float64`, as Gymnasium's vector envs return rewards; the batch writes `float32` into `rewards32`.
+    rewards: Py<PyArray1<f64>>,
     terminated: Py<PyArray1<bool>>,
     truncated: Py<PyArray1<bool>>,
     fuel: Py<PyArray1<u32>>,
@@ -83,6 +84,7 @@ pub(crate) struct PyVectorEnv {
     inner: VectorEnv,
     copy: bool,
     arrays: Option<Arrays>,
+    rewards32: Vec<f32>,
 }
 
 impl PyVectorEnv {
@@ -123,7 +125,7 @@ impl PyVectorEnv {
         let contiguous = "the binding's own arrays are contiguous";
         let batch = BatchMut {
             observations: obs.as_buf_mut(),
-            rewards: rewards.as_slice_mut().expect(contiguous),
+            rewards: &mut self.rewards32,
             terminated: terminated.as_slice_mut().expect(contiguous),
             truncated: truncated.as_slice_mut().expect(contiguous),
             fuel: fuel.as_slice_mut().expect(contiguous),
@@ -133,6 +135,9 @@ impl PyVectorEnv {
         };
         let inner = &mut self.inner;
         py.detach(|| f(inner, batch))?;
+        for (d, &r) in rewards.as_slice_mut().expect(contiguous).iter_mut().zip(&self.rewards32) {
+            *d = f64::from(r);
+        }
         drop((obs, final_obs, rewards, terminated, truncated, fuel, lives, cause));
         PyTuple::new(
             py,
@@ -166,7 +171,8 @@ impl PyVectorEnv {
         let mode = if same_step { AutoresetMode::SameStep } else { AutoresetMode::NextStep };
         let mut inner = VectorEnv::with_mode(config, num_envs, num_threads, mode).map_err(env_error)?;
         inner.set_time_limit(time_limit).map_err(env_error)?;
-        Ok(PyVectorEnv { inner, copy, arrays: None })
+        let rewards32 = vec![0.0; num_envs];
+        Ok(PyVectorEnv { inner, copy, arrays: None, rewards32 })
     }
 
     /// Resets every environment: `seed` gives environment `i` the seed `seed + i`; `None` continues each
