@@ -109,7 +109,12 @@ impl Observer {
         match (&mut newest, &mut stacked, out) {
             (ObsData::U8(n), ObsData::U8(s), ObsBufMut::U8(o)) => {
                 self.write_single(world, config, ObsBufMut::U8(n));
-                push_frame(s, n, channels, k, reset);
+                match (channels, k) {
+                    (1, 2) if !reset => push_gray::<2>(s, n),
+                    (1, 4) if !reset => push_gray::<4>(s, n),
+                    (1, 8) if !reset => push_gray::<8>(s, n),
+                    _ => push_frame(s, n, channels, k, reset),
+                }
                 o.copy_from_slice(s);
             }
             (ObsData::F32(n), ObsData::F32(s), ObsBufMut::F32(o)) => {
@@ -166,16 +171,56 @@ pub fn luma(r: u8, g: u8, b: u8) -> u8 {
 /// Shifts each pixel's group of `k` frames one older and appends the newest frame's channels.
 /// `stack` holds pixels of `channels · k` elements; `newest` holds the same pixels of `channels` elements.
 /// On `reset` every slot takes the newest frame.
+///
+/// Shifting the whole buffer left by `channels` elements (one `memmove`) moves every group's frames one
+/// older at once; it also drags the next pixel's oldest frame into each group's newest slot, which the newest
+/// frame then overwrites.
 fn push_frame<T: Copy>(stack: &mut [T], newest: &[T], channels: usize, k: usize, reset: bool) {
     let group = channels * k;
-    for (px, new) in stack.chunks_exact_mut(group).zip(newest.chunks_exact(channels)) {
-        if reset {
+    if reset {
+        for (px, new) in stack.chunks_exact_mut(group).zip(newest.chunks_exact(channels)) {
             for slot in px.chunks_exact_mut(channels) {
                 slot.copy_from_slice(new);
             }
-        } else {
-            px.copy_within(channels.., 0);
-            px[group - channels..].copy_from_slice(new);
         }
+        return;
+    }
+    stack.copy_within(channels.., 0);
+    match channels {
+        1 => put_newest::<T, 1>(stack, newest, group),
+        3 => put_newest::<T, 3>(stack, newest, group),
+        _ => {
+            for (px, new) in stack.chunks_exact_mut(group).zip(newest.chunks_exact(channels)) {
+                px[group - channels..].copy_from_slice(new);
+            }
+        }
+    }
+}
+
+/// Writes each pixel's `C` newest channels into the last slot of its group (`C` known at compile time).
+fn put_newest<T: Copy, const C: usize>(stack: &mut [T], newest: &[T], group: usize) {
+    for (px, new) in stack.chunks_exact_mut(group).zip(newest.chunks_exact(C)) {
+        let slot: &mut [T; C] = (&mut px[group - C..]).try_into().expect("C elements");
+        *slot = new.try_into().expect("C elements");
+    }
+}
+
+/// [`push_frame`] for one-channel `u8` frames stacked `K` deep (2, 4 or 8): each pixel's group is one
+/// little-endian word, shifted down by a byte with the newest frame in the top byte.
+fn push_gray<const K: usize>(stack: &mut [u8], newest: &[u8]) {
+    macro_rules! words {
+        ($word:ty) => {
+            for (px, &n) in stack.chunks_exact_mut(K).zip(newest) {
+                let v = <$word>::from_le_bytes(px.try_into().expect("K bytes"));
+                let v = (v >> 8) | ((n as $word) << (8 * (K - 1)));
+                px.copy_from_slice(&v.to_le_bytes());
+            }
+        };
+    }
+    match K {
+        2 => words!(u16),
+        4 => words!(u32),
+        8 => words!(u64),
+        _ => unreachable!("push_gray handles 2, 4 or 8 frames"),
     }
 }
