@@ -23,6 +23,7 @@ const ctx = canvas.getContext("2d", { alpha: false });
 const wasm = await init();
 
 let game = null;
+let seed = 0n; // of the game on screen
 let over = false;
 let paused = false;
 let pilot = false;
@@ -51,12 +52,21 @@ function readSeed() {
   return BigInt(text);
 }
 
+// R restarts with the next seed, as `chopperscape play` does.
+function restartWithNextSeed() {
+  const typed = $("seed").value;
+  $("seed").value = String((seed + 1n) % 2n ** 64n);
+  const error = newGame();
+  if (error) $("seed").value = typed;
+  return error;
+}
+
 // Starts a game from the form. Returns the error message, or null. A bad form changes nothing.
 function newGame() {
   let next;
-  let seed;
+  let nextSeed;
   try {
-    seed = readSeed();
+    nextSeed = readSeed();
     next = new Game(["lives", "alien_prob"], [$("lives").value, $("alien_prob").value]);
   } catch (e) {
     showError(e.message);
@@ -65,6 +75,7 @@ function newGame() {
   showError("");
   game?.free();
   game = next;
+  seed = nextSeed;
   game.reset(seed);
   over = false;
   lastCause = null;
@@ -151,7 +162,7 @@ window.addEventListener("keydown", (event) => {
   } else if (event.code === "KeyP" && !event.repeat) {
     setPaused(!paused);
   } else if (event.code === "KeyR" && !event.repeat) {
-    newGame();
+    restartWithNextSeed();
   }
 });
 window.addEventListener("keyup", (event) => {
@@ -185,14 +196,15 @@ window.chopperscape = {
     lives: game.lives(),
     score: game.episode_return(),
     steps: game.steps(),
+    seed: String(seed),
     over,
     cause: lastCause,
     paused,
     pilot,
   }),
   // Fills the form and starts a game; returns the error message, or null.
-  newGame(seed, options = {}) {
-    $("seed").value = String(seed);
+  newGame(seedValue, options = {}) {
+    $("seed").value = String(seedValue);
     $("lives").value = String(options.lives ?? 1);
     $("alien_prob").value = String(options.alien_prob ?? 0);
     return newGame();

@@ -60,9 +60,11 @@ export function launchChromium() {
 }
 
 // Opens the page in a fresh context; collects console errors and uncaught exceptions into `errors`.
-export async function openPage(browser, url) {
-  const context = await browser.newContext({ viewport: { width: 900, height: 900 } });
+// With `clock`, the page's time (and so its 30-steps-per-second loop) only moves by `page.clock.runFor`.
+export async function openPage(browser, url, { clock = false } = {}) {
+  const context = await browser.newContext({ viewport: { width: 880, height: 900 } });
   const page = await context.newPage();
+  if (clock) await page.clock.install();
   const errors = [];
   page.on("console", (msg) => {
     if (msg.type() === "error") errors.push(msg.text());

@@ -130,8 +130,9 @@ test("an option out of range is refused with its name and changes nothing", asyn
   });
 });
 
-test("P pauses, the end of an episode says why, and R starts a new game", async () => {
+test("P pauses, the end of an episode says why, and R starts a new game with the next seed", async () => {
   await withPage(async (page) => {
+    await page.evaluate(() => window.chopperscape.newGame(41));
     await page.focus("#screen");
     await page.keyboard.press("KeyP");
     assert.equal((await state(page)).paused, true);
@@ -140,7 +141,12 @@ test("P pauses, the end of an episode says why, and R starts a new game", async 
     await page.waitForTimeout(300);
     assert.equal((await state(page)).steps, paused.steps, "no steps while paused");
 
-    const end = await page.evaluate(() => window.chopperscape.stepN(Array(1100).fill(4)));
+    // Hovering still: the episode ends by a bird, or by fuel once no tank happens to rise through the chopper.
+    const end = await page.evaluate(() => {
+      let s = window.chopperscape.state();
+      while (!s.over && s.steps < 10000) s = window.chopperscape.stepN(Array(500).fill(4));
+      return s;
+    });
     assert.equal(end.over, true);
     assert.ok(end.cause === "bird" || end.cause === "fuel", end.cause);
     assert.equal(await page.isVisible("#message"), true);
@@ -152,6 +158,8 @@ test("P pauses, the end of an episode says why, and R starts a new game", async 
     const fresh = await state(page);
     assert.equal(fresh.over, false);
     assert.equal(fresh.steps, 0);
+    assert.equal(fresh.seed, "42");
+    assert.equal(await page.inputValue("#seed"), "42");
     assert.equal(await page.isVisible("#message"), false);
   });
 });

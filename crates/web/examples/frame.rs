@@ -34,7 +34,8 @@ fn run() -> Result<(), String> {
                     .collect::<Result<_, _>>()?
             }
             "--option" => {
-                let (name, v) = value.split_once('=').ok_or_else(|| format!("--option {value}: expected NAME=VALUE"))?;
+                let (name, v) =
+                    value.split_once('=').ok_or_else(|| format!("--option {value}: expected NAME=VALUE"))?;
                 config.set(name, v).map_err(|e| e.to_string())?;
             }
             _ => return Err(format!("unknown argument {flag}; {usage}")),
