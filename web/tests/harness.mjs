@@ -64,7 +64,10 @@ export function launchChromium() {
 export async function openPage(browser, url, { clock = false } = {}) {
   const context = await browser.newContext({ viewport: { width: 880, height: 900 } });
   const page = await context.newPage();
-  if (clock) await page.clock.install();
+  if (clock) {
+    await page.clock.install({ time: 0 });
+    await page.clock.pauseAt(1000);
+  }
   const errors = [];
   page.on("console", (msg) => {
     if (msg.type() === "error") errors.push(msg.text());
