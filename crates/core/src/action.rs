@@ -58,10 +58,7 @@ impl TryFrom<i64> for Action {
     /// # Errors
     /// [`Error::InvalidAction`] for anything outside `0..=4`.
     fn try_from(a: i64) -> Result<Action, Error> {
-        usize::try_from(a)
-            .ok()
-            .and_then(|i| Action::ALL.get(i).copied())
-            .ok_or(Error::InvalidAction(a))
+        usize::try_from(a).ok().and_then(|i| Action::ALL.get(i).copied()).ok_or(Error::InvalidAction(a))
     }
 }
 

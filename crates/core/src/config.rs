@@ -37,12 +37,7 @@ pub enum ObsType {
 
 impl ObsType {
     /// Every observation type, in SPEC order.
-    pub const ALL: [ObsType; 4] = [
-        ObsType::Rgb,
-        ObsType::RgbFloat,
-        ObsType::Grayscale,
-        ObsType::Features,
-    ];
+    pub const ALL: [ObsType; 4] = [ObsType::Rgb, ObsType::RgbFloat, ObsType::Grayscale, ObsType::Features];
 
     /// The name used in SPEC.md and Python: `"rgb"`, `"rgb_float"`, `"grayscale"`, `"features"`.
     pub fn as_str(self) -> &'static str {
@@ -157,11 +152,7 @@ fn out_of_range(option: &'static str, value: impl ToString, allowed: &'static st
 }
 
 fn check_prob(option: &'static str, p: f64) -> Result<(), ConfigError> {
-    if (0.0..=1.0).contains(&p) {
-        Ok(())
-    } else {
-        Err(out_of_range(option, p, "a probability in [0, 1]"))
-    }
+    if (0.0..=1.0).contains(&p) { Ok(()) } else { Err(out_of_range(option, p, "a probability in [0, 1]")) }
 }
 
 fn check_range(option: &'static str, v: u32, lo: u32, hi: u32, allowed: &'static str) -> Result<(), ConfigError> {

@@ -55,9 +55,7 @@ pub enum SnapshotError {
 #[non_exhaustive]
 pub enum Error {
     /// An action outside `Discrete(5)`.
-    #[error(
-        "invalid action {0}: allowed actions are 0..=4 (0 Right, 1 Left, 2 Down, 3 Up, 4 Do Nothing)"
-    )]
+    #[error("invalid action {0}: allowed actions are 0..=4 (0 Right, 1 Left, 2 Down, 3 Up, 4 Do Nothing)")]
     InvalidAction(i64),
     /// `step` before any `reset`.
     #[error("step called before reset: call reset() first")]
@@ -66,7 +64,9 @@ pub enum Error {
     #[error("step called after the episode ended ({0}): call reset() to start a new episode")]
     EpisodeOver(&'static str),
     /// A caller-owned buffer of the wrong length or element type.
-    #[error("observation buffer has {got} elements of {got_dtype}: this environment writes {expected} elements of {expected_dtype}")]
+    #[error(
+        "observation buffer has {got} elements of {got_dtype}: this environment writes {expected} elements of {expected_dtype}"
+    )]
     BufferSize {
         /// Elements the observation needs.
         expected: usize,

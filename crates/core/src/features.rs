@@ -52,54 +52,53 @@ pub fn high() -> [f32; FEATURES_LEN] {
 
 /// Writes the features of `world` into `out` (`out.len() == FEATURES_LEN`). `lives` and `max_fuel` are the options.
 pub fn write(world: &World, lives: u32, max_fuel: u32, out: &mut [f32]) {
-    assert_eq!(out.len(), FEATURES_LEN, "features buffer length");
+    let out: &mut [f32; FEATURES_LEN] = out.try_into().expect("features buffer of FEATURES_LEN values");
     let c = world.chopper;
-    out[0] = (c.x - X_MIN) as f32 / (X_MAX - X_MIN - CHOPPER_SIZE.0) as f32;
-    out[1] = (c.y - Y_MIN) as f32 / (Y_MAX - Y_MIN - CHOPPER_SIZE.1) as f32;
+    out[0] = (c.x - X_MIN) as f32 * (1.0 / (X_MAX - X_MIN - CHOPPER_SIZE.0) as f32);
+    out[1] = (c.y - Y_MIN) as f32 * (1.0 / (Y_MAX - Y_MIN - CHOPPER_SIZE.1) as f32);
     out[2] = world.fuel_left as f32 / max_fuel as f32;
     out[3] = world.lives as f32 / lives as f32;
-    let mut at = 4;
-    at = nearest(&c, world.birds.iter().copied(), BIRD_SLOTS, out, at);
-    at = nearest(&c, world.fuel_tanks.iter().copied(), FUEL_TANK_SLOTS, out, at);
-    at = nearest(&c, world.aliens.iter().map(|a| a.body), ALIEN_SLOTS, out, at);
-    at = nearest(&c, world.missiles.iter().copied(), MISSILE_SLOTS, out, at);
-    debug_assert_eq!(at, FEATURES_LEN);
+    let (birds, rest) = out[4..].split_at_mut(SLOT_LEN * BIRD_SLOTS);
+    let (tanks, rest) = rest.split_at_mut(SLOT_LEN * FUEL_TANK_SLOTS);
+    let (aliens, missiles) = rest.split_at_mut(SLOT_LEN * ALIEN_SLOTS);
+    nearest::<BIRD_SLOTS>(&c, world.birds.iter().copied(), birds);
+    nearest::<FUEL_TANK_SLOTS>(&c, world.fuel_tanks.iter().copied(), tanks);
+    nearest::<ALIEN_SLOTS>(&c, world.aliens.iter().map(|a| a.body), aliens);
+    nearest::<MISSILE_SLOTS>(&c, world.missiles.iter().copied(), missiles);
 }
 
-/// Fills `slots` slots from `out[at..]` with the entities nearest the chopper; returns the next index.
-fn nearest(chopper: &Rect, entities: impl Iterator<Item = Rect>, slots: usize, out: &mut [f32], at: usize) -> usize {
-    const MAX_SLOTS: usize = 4;
-    debug_assert!(slots <= MAX_SLOTS);
+/// Fills the `SLOTS` slots of `out` with the entities nearest the chopper.
+#[inline]
+fn nearest<const SLOTS: usize>(chopper: &Rect, entities: impl Iterator<Item = Rect>, out: &mut [f32]) {
+    // Centres are kept doubled (whole numbers), hence the factor 2 in the scales.
+    const DX_SCALE: f32 = 1.0 / (2 * (X_MAX - X_MIN)) as f32;
+    const DY_SCALE: f32 = 1.0 / (2 * (Y_MAX - Y_MIN)) as f32;
     let (ccx, ccy) = chopper.centre2();
-    // (squared distance in half-pixels, dx2, dy2), kept sorted; strict `<` keeps the older entity first on ties.
-    let mut best = [(i64::MAX, 0i32, 0i32); MAX_SLOTS];
+    // (squared distance, dx, dy), kept sorted; strict `<` keeps the older entity first on ties.
+    let mut best = [(i64::MAX, 0i32, 0i32); SLOTS];
     let mut filled = 0;
     for e in entities {
         let (ex, ey) = e.centre2();
         let (dx, dy) = (ex - ccx, ey - ccy);
         let d = dx as i64 * dx as i64 + dy as i64 * dy as i64;
-        if filled == slots && d >= best[slots - 1].0 {
+        if filled == SLOTS && d >= best[SLOTS - 1].0 {
             continue;
         }
-        let mut i = filled.min(slots - 1);
+        let mut i = filled.min(SLOTS - 1);
         while i > 0 && d < best[i - 1].0 {
             best[i] = best[i - 1];
             i -= 1;
         }
         best[i] = (d, dx, dy);
-        filled = (filled + 1).min(slots);
+        filled = (filled + 1).min(SLOTS);
     }
-    for (k, slot) in out[at..at + slots * SLOT_LEN].chunks_exact_mut(SLOT_LEN).enumerate() {
-        if k < filled {
-            let (_, dx, dy) = best[k];
-            slot[0] = 1.0;
-            slot[1] = dx as f32 / (2 * (X_MAX - X_MIN)) as f32;
-            slot[2] = dy as f32 / (2 * (Y_MAX - Y_MIN)) as f32;
-        } else {
-            slot.fill(0.0);
-        }
+    for (k, slot) in out.chunks_exact_mut(SLOT_LEN).enumerate() {
+        let (_, dx, dy) = best[k];
+        let present = k < filled;
+        slot[0] = present as u8 as f32;
+        slot[1] = if present { dx as f32 * DX_SCALE } else { 0.0 };
+        slot[2] = if present { dy as f32 * DY_SCALE } else { 0.0 };
     }
-    at + slots * SLOT_LEN
 }
 
 #[cfg(test)]
@@ -127,7 +126,9 @@ mod tests {
         // chopper centre x = 132, bird centres = x + 16.
         let dxs: Vec<f32> = (0..4).map(|k| out[4 + 3 * k + 1]).collect();
         let expect: Vec<f32> = [200, 300, 500, 600].iter().map(|x| (x + 16 - 132) as f32 / 800.0).collect();
-        assert_eq!(dxs, expect);
+        for (a, e) in dxs.iter().zip(&expect) {
+            assert!((a - e).abs() < 1e-6, "{dxs:?} vs {expect:?}");
+        }
         assert!((0..4).all(|k| out[4 + 3 * k] == 1.0));
         assert!(out[16..].iter().all(|&v| v == 0.0), "no tanks, aliens or missiles");
     }
