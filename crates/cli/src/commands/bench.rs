@@ -9,7 +9,6 @@ use chopperscape::{ChopperScape, Config, ObsBufMut, ObsType, World};
 use chopperscape_vector::VectorEnv;
 use clap::Args;
 use serde::Serialize;
-use serde_json::json;
 
 use crate::options::GameOptions;
 use crate::progress;
@@ -92,7 +91,11 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     }
     bar.finish_and_clear();
     if args.json {
-        println!("{}", json!({ "scenarios": measured }));
+        #[derive(Serialize)]
+        struct Report<'a> {
+            scenarios: &'a [Measured],
+        }
+        println!("{}", serde_json::to_string(&Report { scenarios: &measured })?);
     } else {
         println!("{:<20} {:>7} {:>16}", "scenario", "threads", "steps/s");
         for m in &measured {
