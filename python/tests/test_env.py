@@ -230,13 +230,15 @@ def test_rendering_collects_fresh_frames_like_record_video():
 
 
 def test_human_mode_shows_a_window_or_names_the_missing_dependency():
-    env = gym.make("ChopperScape-v0", obs_type="features", render_mode="human")
-    try:
-        import pygame  # noqa: F401
-    except ImportError:
-        with pytest.raises(gym.error.DependencyNotInstalled, match="pygame"):
-            env.reset(seed=0)
+    from chopperscape.env import HUMAN_AVAILABLE
+
+    if not HUMAN_AVAILABLE:
+        assert "human" not in ChopperScapeEnv.metadata["render_modes"]
+        with pytest.raises(ValueError, match="pygame"):
+            ChopperScapeEnv(render_mode="human")
         return
+    assert "human" in ChopperScapeEnv.metadata["render_modes"]
+    env = gym.make("ChopperScape-v0", obs_type="features", render_mode="human")
     env.reset(seed=0)
     env.step(0)
     assert env.render() is None

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The Python package's tests: a virtual environment at .venv with the package (built by maturin in release
+# mode from crates/python), gymnasium, numpy, pytest and pygame (for render_mode="human"), then pytest.
+# Idempotent: the extension is rebuilt only when its sources changed. Quiet on success but for pytest's summary.
+set -euo pipefail
+. "$(dirname "$0")/lib.sh"
+cd "$ROOT"
+
+if ! command -v python3 >/dev/null 2>&1; then
+  say "skipped: the Python tests (python3 is not installed)"
+  exit 0
+fi
+if [ ! -x .venv/bin/python ]; then
+  if ! python3 -m venv .venv >/dev/null 2>&1; then
+    rm -rf .venv
+    apt_install python3-venv || { say "skipped: the Python tests (python3 -m venv does not work)"; exit 0; }
+    quiet python3 -m venv .venv
+  fi
+fi
+PY=.venv/bin/python
+quiet "$PY" -m pip install --disable-pip-version-check -q "maturin>=1.9.4,<2" "gymnasium>=1.1" numpy "pytest>=7"
+"$PY" -c "import pygame" >/dev/null 2>&1 || quiet "$PY" -m pip install --disable-pip-version-check -q pygame \
+  || say "skipped: pygame (render_mode=\"human\" is tested as unavailable instead)"
+
+# Rebuild the extension only when something it is built from changed.
+stamp=.venv/.chopperscape-build
+sources=$(find Cargo.toml Cargo.lock python/pyproject.toml python/chopperscape crates/core crates/vector crates/python \
+  -type f -not -path '*/__pycache__/*' | LC_ALL=C sort)
+hash=$(printf '%s\n' "$sources" | xargs cat | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$stamp" 2>/dev/null)" != "$hash" ] || ! "$PY" -c "import chopperscape._core" >/dev/null 2>&1; then
+  PATH="$ROOT/.venv/bin:$PATH" quiet "$PY" -m pip install --disable-pip-version-check -q --no-build-isolation \
+    --no-deps --force-reinstall ./python
+  echo "$hash" >"$stamp"
+fi
+
+log=$(mktemp)
+# Run from the repository root, so that python/chopperscape (sources without the extension) is not importable.
+if SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy "$PY" -m pytest -q -p no:cacheprovider -c python/pyproject.toml \
+  python/tests >"$log" 2>&1; then
+  grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
+  rm -f "$log"
+else
+  rc=$?
+  cat "$log" >&2
+  rm -f "$log"
+  exit "$rc"
+fi
