@@ -45,7 +45,8 @@ class VectorEnv(gym.vector.VectorEnv):
 
     `step(actions)` takes `num_envs` integer actions in `0..=4`; a wrong shape, dtype or value raises
     `ValueError` and moves no environment. Infos follow Gymnasium's vector convention: `info["fuel"]`,
-    `info["lives"]` (int64 arrays) with masks `info["_fuel"]`, `info["_lives"]`, and `info["cause"]` (an object
+    `info["lives"]` (int64 arrays) with masks `info["_fuel"]`, `info["_lives"]` (one shared read-only
+    all-true array), and `info["cause"]` (an object
     array of `"bird"`, `"fuel"` or `None`) with `info["_cause"]` when some episode terminated.
     """
 
@@ -109,6 +110,9 @@ class VectorEnv(gym.vector.VectorEnv):
         self.single_action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._stream_started = False
+        # Every environment has fuel and lives every step: one shared, read-only all-true mask.
+        self._all = np.ones(self.num_envs, dtype=np.bool_)
+        self._all.flags.writeable = False
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -143,6 +147,22 @@ class VectorEnv(gym.vector.VectorEnv):
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Steps every environment; see the class docstring for autoreset and infos."""
+        if not (
+            type(actions) is np.ndarray
+            and actions.dtype == np.int64
+            and actions.shape == (self.num_envs,)
+            and actions.flags.c_contiguous
+        ):
+            actions = self._checked_actions(actions)
+        obs, rewards, terminated, truncated, fuel, lives, cause, final_obs = self._core.step(actions)
+        if final_obs is None:
+            infos = self._infos(fuel, lives, cause)
+        else:
+            infos = self._same_step_infos(final_obs, terminated | truncated, fuel, lives, cause)
+        return obs, rewards, terminated, truncated, infos
+
+    def _checked_actions(self, actions: Any) -> np.ndarray:
+        """`actions` as a contiguous int64 array, or `ValueError` naming what is wrong (values are checked in Rust)."""
         actions = np.asarray(actions)
         if actions.shape != (self.num_envs,):
             raise ValueError(
@@ -158,22 +178,10 @@ class VectorEnv(gym.vector.VectorEnv):
                     "(0 Right, 1 Left, 2 Down, 3 Up, 4 Do Nothing)"
                 )
             actions = actions.astype(np.int64)
-        obs, rewards, terminated, truncated, fuel, lives, cause, final_obs = self._core.step(
-            np.ascontiguousarray(actions)
-        )
-        if final_obs is None:
-            infos = self._infos(fuel, lives, cause)
-        else:
-            infos = self._same_step_infos(final_obs, terminated | truncated, fuel, lives, cause)
-        return obs, rewards, terminated, truncated, infos
+        return np.ascontiguousarray(actions)
 
     def _infos(self, fuel: np.ndarray, lives: np.ndarray, cause: np.ndarray | None = None) -> dict[str, Any]:
-        infos: dict[str, Any] = {
-            "fuel": fuel.astype(np.int64),
-            "_fuel": np.ones(self.num_envs, dtype=np.bool_),
-            "lives": lives.astype(np.int64),
-            "_lives": np.ones(self.num_envs, dtype=np.bool_),
-        }
+        infos: dict[str, Any] = {"fuel": fuel, "_fuel": self._all, "lives": lives, "_lives": self._all}
         if cause is not None and cause.any():
             infos["cause"] = _CAUSES[cause]
             infos["_cause"] = cause != 0
@@ -192,9 +200,9 @@ class VectorEnv(gym.vector.VectorEnv):
         for i in np.flatnonzero(ended):
             objs[i] = final_obs[i].copy()
         final_info: dict[str, Any] = {
-            "fuel": np.where(ended, fuel, 0).astype(np.int64),
+            "fuel": np.where(ended, fuel, 0),
             "_fuel": ended.copy(),
-            "lives": np.where(ended, lives, 0).astype(np.int64),
+            "lives": np.where(ended, lives, 0),
             "_lives": ended.copy(),
         }
         if cause.any():

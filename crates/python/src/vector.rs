@@ -20,8 +20,10 @@ struct Arrays {
     rewards: Py<PyArray1<f64>>,
     terminated: Py<PyArray1<bool>>,
     truncated: Py<PyArray1<bool>>,
-    fuel: Py<PyArray1<u32>>,
-    lives: Py<PyArray1<u32>>,
+    /// `int64`, as Gymnasium batches Python ints; the batch writes `uint32` into `fuel32`.
+    fuel: Py<PyArray1<i64>>,
+    /// `int64`; the batch writes `uint32` into `lives32`.
+    lives: Py<PyArray1<i64>>,
     cause: Py<PyArray1<u8>>,
 }
 
@@ -68,6 +70,13 @@ impl ObsRw<'_> {
     }
 }
 
+/// Copies `from` into the wider numpy type Gymnasium's vector envs use.
+fn widen<S: Copy, D: From<S>>(to: &mut [D], from: &[S]) {
+    for (d, &s) in to.iter_mut().zip(from) {
+        *d = D::from(s);
+    }
+}
+
 fn borrowed(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(format!("the vector env's output arrays are in use elsewhere: {e}"))
 }
@@ -85,6 +94,8 @@ pub(crate) struct PyVectorEnv {
     copy: bool,
     arrays: Option<Arrays>,
     rewards32: Vec<f32>,
+    fuel32: Vec<u32>,
+    lives32: Vec<u32>,
 }
 
 impl PyVectorEnv {
@@ -122,22 +133,23 @@ impl PyVectorEnv {
         let (mut rewards, mut terminated, mut truncated) =
             (rw(&a.rewards, py)?, rw(&a.terminated, py)?, rw(&a.truncated, py)?);
         let (mut fuel, mut lives, mut cause) = (rw(&a.fuel, py)?, rw(&a.lives, py)?, rw(&a.cause, py)?);
+        let (rewards32, fuel32, lives32) = (&mut self.rewards32, &mut self.fuel32, &mut self.lives32);
         let contiguous = "the binding's own arrays are contiguous";
         let batch = BatchMut {
             observations: obs.as_buf_mut(),
-            rewards: &mut self.rewards32,
+            rewards: rewards32,
             terminated: terminated.as_slice_mut().expect(contiguous),
             truncated: truncated.as_slice_mut().expect(contiguous),
-            fuel: fuel.as_slice_mut().expect(contiguous),
-            lives: lives.as_slice_mut().expect(contiguous),
+            fuel: fuel32,
+            lives: lives32,
             cause: cause.as_slice_mut().expect(contiguous),
             final_observations: final_obs.as_mut().map(ObsRw::as_buf_mut),
         };
         let inner = &mut self.inner;
         py.detach(|| f(inner, batch))?;
-        for (d, &r) in rewards.as_slice_mut().expect(contiguous).iter_mut().zip(&self.rewards32) {
-            *d = f64::from(r);
-        }
+        widen(rewards.as_slice_mut().expect(contiguous), &self.rewards32);
+        widen(fuel.as_slice_mut().expect(contiguous), &self.fuel32);
+        widen(lives.as_slice_mut().expect(contiguous), &self.lives32);
         drop((obs, final_obs, rewards, terminated, truncated, fuel, lives, cause));
         PyTuple::new(
             py,
@@ -171,8 +183,8 @@ impl PyVectorEnv {
         let mode = if same_step { AutoresetMode::SameStep } else { AutoresetMode::NextStep };
         let mut inner = VectorEnv::with_mode(config, num_envs, num_threads, mode).map_err(env_error)?;
         inner.set_time_limit(time_limit).map_err(env_error)?;
-        let rewards32 = vec![0.0; num_envs];
-        Ok(PyVectorEnv { inner, copy, arrays: None, rewards32 })
+        let (rewards32, fuel32, lives32) = (vec![0.0; num_envs], vec![0; num_envs], vec![0; num_envs]);
+        Ok(PyVectorEnv { inner, copy, arrays: None, rewards32, fuel32, lives32 })
     }
 
     /// Resets every environment: `seed` gives environment `i` the seed `seed + i`; `None` continues each
