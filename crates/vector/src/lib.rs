@@ -63,6 +63,8 @@ pub struct VectorEnv {
     slots: Vec<Slot>,
     obs_len: usize,
     mode: AutoresetMode,
+    num_threads: usize,
+    /// `num_threads − 1` workers: the calling thread is the last.
     pool: LazyPool,
     time_limit: Option<u32>,
     started: bool,
@@ -102,8 +104,9 @@ impl VectorEnv {
         let env = ChopperScape::new(config)?;
         let obs_len = env.obs_len();
         let slots = vec![Slot { env, ended: false, elapsed: 0 }; num_envs];
-        let pool = LazyPool::new(num_threads.min(num_envs));
-        Ok(VectorEnv { slots, obs_len, mode, pool, time_limit: None, started: false, buffers: None })
+        let num_threads = num_threads.min(num_envs);
+        let pool = LazyPool::new(num_threads - 1);
+        Ok(VectorEnv { slots, obs_len, mode, num_threads, pool, time_limit: None, started: false, buffers: None })
     }
 
     /// Number of environments.
@@ -113,7 +116,7 @@ impl VectorEnv {
 
     /// Worker threads a batch is split over (at most `num_envs`).
     pub fn num_threads(&self) -> usize {
-        self.pool.threads()
+        self.num_threads
     }
 
     /// Truncates each episode after `limit` steps exactly as Gymnasium's `TimeLimit` wrapper does: the step
@@ -282,14 +285,16 @@ impl VectorEnv {
         })
     }
 
-    /// Runs `f(first_env_index, slots, outputs)` on one contiguous chunk of environments per thread.
+    /// Runs `f(first_env_index, slots, outputs)` on one contiguous chunk of environments per thread: the
+    /// calling thread takes the first chunk and the pool's `num_threads − 1` workers the others, so a batch
+    /// wakes one thread fewer and the caller never sits idle.
     fn for_each_chunk(
         &mut self,
         out: BatchMut<'_>,
         f: impl Fn(usize, &mut [Slot], BatchMut<'_>) + Sync,
     ) -> Result<(), BatchError> {
         let n = self.slots.len();
-        let threads = self.pool.threads();
+        let threads = self.num_threads;
         if threads <= 1 {
             f(0, &mut self.slots, out);
             return Ok(());
@@ -297,7 +302,20 @@ impl VectorEnv {
         let chunk = n.div_ceil(threads);
         let obs_len = self.obs_len;
         let slots = &mut self.slots;
-        self.pool.get()?.install(|| split_run(0, slots, out, chunk, obs_len, &f));
+        let f = &f;
+        self.pool.get()?.in_place_scope(|scope| {
+            let (own_slots, mut rest_slots) = slots.split_at_mut(chunk.min(n));
+            let (own_out, mut rest_out) = out.split_at(own_slots.len(), obs_len);
+            let mut first = own_slots.len();
+            while !rest_slots.is_empty() {
+                let take = chunk.min(rest_slots.len());
+                let (s, s_rest) = rest_slots.split_at_mut(take);
+                let (o, o_rest) = rest_out.split_at(take, obs_len);
+                scope.spawn(move |_| f(first, s, o));
+                (rest_slots, rest_out, first) = (s_rest, o_rest, first + take);
+            }
+            f(0, own_slots, own_out);
+        });
         Ok(())
     }
 
@@ -363,22 +381,6 @@ impl VectorEnv {
     pub fn causes(&self) -> &[u8] {
         self.buffers.as_ref().map_or(&[], |b| &b.cause)
     }
-}
-
-/// Halves the batch at a chunk boundary until each part is one chunk, running the halves with `rayon::join`:
-/// one contiguous chunk per thread, no allocation.
-fn split_run<F>(first: usize, slots: &mut [Slot], out: BatchMut<'_>, chunk: usize, obs_len: usize, f: &F)
-where
-    F: Fn(usize, &mut [Slot], BatchMut<'_>) + Sync,
-{
-    if slots.len() <= chunk {
-        f(first, slots, out);
-        return;
-    }
-    let mid = slots.len().div_ceil(chunk) / 2 * chunk;
-    let (s1, s2) = slots.split_at_mut(mid);
-    let (o1, o2) = out.split_at(mid, obs_len);
-    rayon::join(|| split_run(first, s1, o1, chunk, obs_len, f), || split_run(first + mid, s2, o2, chunk, obs_len, f));
 }
 
 /// Calls `f(j, observation j)` for each `obs_len`-element observation of `buf`.

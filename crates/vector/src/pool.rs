@@ -21,10 +21,6 @@ impl LazyPool {
         LazyPool { threads, built: None }
     }
 
-    pub(crate) fn threads(&self) -> usize {
-        self.threads
-    }
-
     /// The pool, built now if this process has none yet.
     pub(crate) fn get(&mut self) -> Result<&ThreadPool, BatchError> {
         let pid = std::process::id();
