@@ -1,7 +1,7 @@
 //! Arbitrary bytes into the snapshot decoder: it must return an error or a snapshot that restores into an
 //! environment which then steps without panicking, and re-encodes to the same bytes.
 #![no_main]
-use chopperscape::{ChopperScape, Snapshot};
+use chopperscape::{ChopperScape, Env, Snapshot};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

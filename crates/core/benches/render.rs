@@ -53,6 +53,32 @@ fn bench_steps(bencher: Bencher, options: &[(&str, &str)]) {
     });
 }
 
+/// Like `bench_steps`, through `step_into_incremental`: only what changed is drawn onto the caller's buffer.
+fn bench_steps_incremental(bencher: Bencher, options: &[(&str, &str)]) {
+    let (mut env, mut bytes, _) = setup(options);
+    let mut t = 0i64;
+    bencher.counter(ItemsCount::new(1usize)).bench_local(|| {
+        t += 1;
+        let tr = env.step_into_incremental(t % 5, ObsBufMut::U8(&mut bytes)).unwrap();
+        if tr.terminated || tr.truncated {
+            env.reset_into(None, ObsBufMut::U8(&mut bytes)).unwrap();
+        }
+    });
+}
+
+/// `rgb` at 600 × 800, drawn onto the caller's buffer: the observation lands in the caller's memory without a
+/// whole-frame copy.
+#[divan::bench]
+fn rgb_600x800_incremental(bencher: Bencher) {
+    bench_steps_incremental(bencher, &[]);
+}
+
+/// `grayscale` at 84 × 84, drawn onto the caller's buffer.
+#[divan::bench]
+fn gray_84x84_incremental(bencher: Bencher) {
+    bench_steps_incremental(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")]);
+}
+
 /// `rgb` at 600 × 800 (the default): one step plus the 1.44 MB copy out.
 #[divan::bench]
 fn rgb_600x800(bencher: Bencher) {

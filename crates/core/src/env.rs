@@ -147,6 +147,30 @@ impl ChopperScape {
         })
     }
 
+    /// Like [`ChopperScape::step_into`], but for `rgb` and `grayscale` observations with `frame_stack = 1` it
+    /// draws only what changed (a few kilobytes) straight onto `out` instead of copying a whole frame: the
+    /// fastest way to get full-size pixels.
+    ///
+    /// Contract: `out` is the buffer the previous `reset_into`, `step_into` or `step_into_incremental` of this env
+    /// wrote, and nobody modified it since. A different buffer (another address) is detected and gets a full
+    /// redraw; a modified one is not, and keeps the modification outside the redrawn rectangles. Other
+    /// observation types behave exactly as `step_into`.
+    ///
+    /// # Errors
+    /// As [`ChopperScape::step_into`]; nothing changes then.
+    pub fn step_into_incremental(&mut self, action: i64, out: ObsBufMut<'_>) -> Result<Transition, Error> {
+        let action = Action::try_from(action)?;
+        self.observer.check(&out)?;
+        let outcome = self.game.step(action)?;
+        self.observer.observe_onto(self.game.world(), self.game.config(), out);
+        Ok(Transition {
+            reward: outcome.reward,
+            terminated: outcome.terminated,
+            truncated: outcome.truncated,
+            info: self.info(),
+        })
+    }
+
     /// The info of the current state.
     pub fn info(&self) -> Info {
         let w = self.game.world();

@@ -39,6 +39,17 @@ pub(crate) struct Observer {
     space: BoxSpace,
     /// Whether the canvas no longer holds the last drawn frame (after a restore), so the next draw is full.
     stale: bool,
+    /// Where the frame that the renderer's incremental state describes lives (see [`Observer::observe_onto`]).
+    target: Target,
+}
+
+/// The buffer holding the frame the renderer drew last.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    /// The observer's own canvas, last copied into the caller's buffer at this address (0: none).
+    Canvas { copied_to: usize },
+    /// A caller's buffer at this address, drawn onto directly; the canvas is out of date.
+    Caller(usize),
 }
 
 impl Observer {
@@ -69,7 +80,7 @@ impl Observer {
             Dtype::F32 => ObsData::F32(vec![0.0; n]),
         };
         let (stacked, newest) = (zeros(n_stacked), zeros(n_newest));
-        Observer { obs_type: config.obs_type, k, channels, canvas, renderer, stacked, newest, space, stale: true }
+        Observer { obs_type: config.obs_type, k, channels, canvas, renderer, stacked, newest, space, stale: true, target: Target::Canvas { copied_to: 0 } }
     }
 
     pub(crate) fn space(&self) -> &BoxSpace {
@@ -92,7 +103,7 @@ impl Observer {
     /// Writes the observation of `world` into `out` (already checked). `reset` starts a new stack and a full redraw.
     pub(crate) fn observe(&mut self, world: &World, config: &Config, reset: bool, out: ObsBufMut<'_>) {
         if self.obs_type.is_pixels() {
-            if reset || self.stale {
+            if reset || self.stale || matches!(self.target, Target::Caller(_)) {
                 self.stale = false;
                 self.renderer.draw_full(world, config.lives, &mut self.canvas);
             } else {
@@ -100,6 +111,11 @@ impl Observer {
             }
         }
         if self.k == 1 {
+            let copied_to = match &out {
+                ObsBufMut::U8(o) if self.obs_type.is_pixels() => o.as_ptr() as usize,
+                _ => 0,
+            };
+            self.target = Target::Canvas { copied_to };
             self.write_single(world, config, out);
             return;
         }
@@ -126,6 +142,31 @@ impl Observer {
         }
         self.newest = newest;
         self.stacked = stacked;
+    }
+
+    /// Like [`Observer::observe`] after a step, but for `rgb` and `grayscale` with `frame_stack = 1` it draws only
+    /// what changed straight onto `out`, which must hold the last observation this observer wrote there (by
+    /// `observe` or `observe_onto`) unmodified. A different buffer (another address) gets a full redraw, so the
+    /// only way to get a wrong frame is to modify the buffer between calls. Other observation types fall back to
+    /// `observe`.
+    pub(crate) fn observe_onto(&mut self, world: &World, config: &Config, out: ObsBufMut<'_>) {
+        let o = match out {
+            ObsBufMut::U8(o) if self.k == 1 && matches!(self.obs_type, ObsType::Rgb | ObsType::Grayscale) => o,
+            out => return self.observe(world, config, false, out),
+        };
+        let addr = o.as_ptr() as usize;
+        let holds_last_frame = !self.stale
+            && match self.target {
+                Target::Canvas { copied_to } => copied_to == addr,
+                Target::Caller(at) => at == addr,
+            };
+        if holds_last_frame {
+            self.renderer.draw(world, config.lives, o);
+        } else {
+            self.stale = false;
+            self.renderer.draw_full(world, config.lives, o);
+        }
+        self.target = Target::Caller(addr);
     }
 
     /// The stacked observation (empty when `frame_stack = 1`): part of a snapshot.

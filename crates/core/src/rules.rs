@@ -53,7 +53,15 @@ impl Game {
     /// The first option out of range.
     pub fn new(config: Config) -> Result<Game, ConfigError> {
         config.validate()?;
-        Ok(Game { config, world: World::default(), rng: Rng::seed_from_u64(0), prev_action: Action::Noop })
+        // Before the first reset the world is a valid one (chopper in the band, full tank), so it can be drawn,
+        // snapshotted and restored like any other.
+        let world = World {
+            chopper: Rect::placed(CHOPPER_SPAWN_X.0, CHOPPER_SPAWN_Y.0, CHOPPER_SIZE),
+            fuel_left: config.max_fuel,
+            lives: config.lives,
+            ..World::default()
+        };
+        Ok(Game { config, world, rng: Rng::seed_from_u64(0), prev_action: Action::Noop })
     }
 
     /// The options.

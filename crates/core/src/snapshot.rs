@@ -129,7 +129,8 @@ impl Snapshot {
         if !r.b.is_empty() {
             return Err(SnapshotError::Corrupted(format!("{} unexpected bytes after the checksum", r.b.len())));
         }
-        if crc32fast::hash(payload) != crc {
+        // Under `cargo fuzz` the checksum is not enforced, so the fuzzer reaches the field checks behind it.
+        if !cfg!(fuzzing) && crc32fast::hash(payload) != crc {
             return Err(SnapshotError::Corrupted("checksum mismatch".into()));
         }
         let snap = decode_payload(&mut Reader { b: payload })?;

@@ -164,3 +164,11 @@ fn restoring_a_snapshot_with_other_options_is_refused_and_changes_nothing() {
     assert!(err.to_string().contains("other options"), "{err}");
     assert_eq!(env.snapshot(), before);
 }
+
+#[test]
+fn a_snapshot_taken_before_the_first_reset_round_trips() {
+    let env = features_env();
+    let snap = Snapshot::from_bytes(&env.snapshot().to_bytes()).unwrap();
+    let mut restored = ChopperScape::from_snapshot(&snap);
+    assert_eq!(restored.step(0).unwrap_err(), Error::NotReset);
+}
