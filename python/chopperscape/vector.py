@@ -89,7 +89,7 @@ class VectorEnv(gym.vector.VectorEnv):
             raise ValueError(
                 f"invalid value {max_episode_steps!r} for option `max_episode_steps`: allowed a positive integer or None"
             )
-        self._core = _core.VectorEnv(
+        self._core_args = (
             int(num_envs),
             int(num_threads),
             {**options, "max_episode_steps": None},
@@ -97,6 +97,7 @@ class VectorEnv(gym.vector.VectorEnv):
             bool(copy),
             None if max_episode_steps is None else int(max_episode_steps),
         )
+        self._core = _core.VectorEnv(*self._core_args)
         self._options = dict(options)
         self.num_envs = int(num_envs)
         self.num_threads = self._core.num_threads
@@ -210,6 +211,18 @@ class VectorEnv(gym.vector.VectorEnv):
             final_info["_cause"] = cause != 0
         infos.update({"final_obs": objs, "_final_obs": ended.copy(), "final_info": final_info, "_final_info": ended.copy()})
         return infos
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickles the options and every environment's state; unpickling continues exactly from there."""
+        state = self.__dict__.copy()
+        state["_core"] = self._core.state()
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        core_state = state.pop("_core")
+        self.__dict__.update(state)
+        self._core = _core.VectorEnv(*self._core_args)
+        self._core.set_state(*core_state)
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """`render_mode="rgb_array"`: one 600 × 800 × 3 frame per environment."""

@@ -243,6 +243,35 @@ def test_single_envs_pickle_into_the_same_state_for_worker_processes():
     assert np.array_equal(env.step(2)[0], copy.step(2)[0])
 
 
+@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
+def test_a_pickled_vector_env_continues_identically(mode):
+    envs = VectorEnv(3, num_threads=2, autoreset_mode=mode, max_episode_steps=LIMIT, **SHORT)
+    envs.reset(seed=8)
+    rng = np.random.default_rng(0)
+    for _ in range(45):
+        envs.step(rng.integers(0, 5, 3))
+    copy = pickle.loads(pickle.dumps(envs))
+    for t in range(80):
+        actions = rng.integers(0, 5, 3)
+        a, b = envs.step(actions), copy.step(actions)
+        for name, x, y in zip(["obs", "rewards", "terminated", "truncated", "infos"], a, b):
+            assert_same(x, y, f"step {t} {name}")
+    assert_same(envs.reset()[0], copy.reset()[0], "unseeded reset")
+
+
+def test_restoring_a_state_of_other_options_changes_nothing():
+    envs = VectorEnv(2, **SHORT)
+    envs.reset(seed=1)
+    before = [envs.env_state(i) for i in range(2)]
+    other = VectorEnv(2, **{**SHORT, "lives": 3})
+    other.reset(seed=1)
+    with pytest.raises(ValueError, match="options"):
+        envs._core.set_state(*other._core.state())
+    with pytest.raises(ValueError, match="4 environments: this batch has 2"):
+        envs._core.set_state(True, other._core.state()[1] * 2)
+    assert [envs.env_state(i) for i in range(2)] == before
+
+
 def test_package_exports():
     assert chopperscape.VectorEnv is VectorEnv
     assert chopperscape.ACTION_MEANINGS == ["Right", "Left", "Down", "Up", "Do Nothing"]

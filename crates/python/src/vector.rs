@@ -220,6 +220,41 @@ impl PyVectorEnv {
         Ok(PyBytes::new(py, &Snapshot::to_bytes(&self.env(i)?.snapshot())))
     }
 
+    /// The batch's state: `(started, [(snapshot bytes, pending reset, elapsed steps)] per environment)`.
+    fn state<'py>(&self, py: Python<'py>) -> (bool, Vec<(Bound<'py, PyBytes>, bool, u32)>) {
+        let envs = (0..self.inner.num_envs())
+            .map(|i| {
+                let bytes = PyBytes::new(py, &self.inner.env(i).snapshot().to_bytes());
+                (bytes, self.inner.pending_reset(i), self.inner.elapsed(i))
+            })
+            .collect();
+        (self.inner.is_started(), envs)
+    }
+
+    /// Restores [`PyVectorEnv::state`] (taken from a batch with the same options and size).
+    fn set_state(&mut self, started: bool, envs: Vec<(Vec<u8>, bool, u32)>) -> PyResult<()> {
+        if envs.len() != self.inner.num_envs() {
+            return Err(PyValueError::new_err(format!(
+                "state holds {} environments: this batch has {}",
+                envs.len(),
+                self.inner.num_envs()
+            )));
+        }
+        let snapshots = envs
+            .iter()
+            .map(|(bytes, _, _)| Snapshot::from_bytes(bytes).map_err(crate::errors::snapshot_error))
+            .collect::<PyResult<Vec<_>>>()?;
+        if started {
+            // Restore into a copy, so that a snapshot of other options leaves this batch as it was.
+            let mut next = self.inner.clone();
+            for (i, (snapshot, (_, pending, elapsed))) in snapshots.iter().zip(&envs).enumerate() {
+                next.restore_env(i, snapshot, *pending, *elapsed).map_err(env_error)?;
+            }
+            self.inner = next;
+        }
+        Ok(())
+    }
+
     /// Number of environments.
     #[getter]
     fn num_envs(&self) -> usize {

@@ -168,6 +168,52 @@ impl VectorEnv {
         &self.slots[i].env
     }
 
+    /// Whether [`VectorEnv::reset`] (or a `reset_*into`) has been called.
+    pub fn is_started(&self) -> bool {
+        self.started
+    }
+
+    /// Whether environment `i` ended in the last step and will reset in the next (`NextStep` autoreset).
+    ///
+    /// # Panics
+    /// If `i >= num_envs`.
+    pub fn pending_reset(&self, i: usize) -> bool {
+        self.slots[i].ended
+    }
+
+    /// Steps since environment `i`'s last reset (what the time limit counts).
+    ///
+    /// # Panics
+    /// If `i >= num_envs`.
+    pub fn elapsed(&self, i: usize) -> u32 {
+        self.slots[i].elapsed
+    }
+
+    /// Puts environment `i` in the state of `snapshot`, with its pending reset and step count (as
+    /// [`VectorEnv::pending_reset`] and [`VectorEnv::elapsed`] reported them): with
+    /// [`chopperscape::ChopperScape::snapshot`] of [`VectorEnv::env`], this saves and restores a whole batch.
+    /// Marks the batch started.
+    ///
+    /// # Errors
+    /// A snapshot taken with other options; nothing changes then.
+    ///
+    /// # Panics
+    /// If `i >= num_envs`.
+    pub fn restore_env(
+        &mut self,
+        i: usize,
+        snapshot: &chopperscape::Snapshot,
+        pending_reset: bool,
+        elapsed: u32,
+    ) -> Result<(), chopperscape::Error> {
+        let slot = &mut self.slots[i];
+        slot.env.restore(snapshot)?;
+        slot.ended = pending_reset;
+        slot.elapsed = elapsed;
+        self.started = true;
+        Ok(())
+    }
+
     /// Owned buffers the size of this batch (with the final-observation buffer in `SameStep` mode).
     pub fn new_buffers(&self) -> Buffers {
         let space = self.single_observation_space();

@@ -247,3 +247,28 @@ fn time_limit_counts_from_each_autoreset() {
     let expected: Vec<bool> = (1..=15).map(|t| t % 5 == 0).collect();
     assert_eq!(truncations, expected);
 }
+
+#[test]
+fn a_batch_saved_and_restored_env_by_env_continues_identically() {
+    let config = short_episodes(ObsType::Features);
+    let mut venv = VectorEnv::new(config.clone(), 3, 2).unwrap();
+    venv.set_time_limit(Some(30)).unwrap();
+    venv.reset(Some(21)).unwrap();
+    for t in 0..37 {
+        venv.step(&[action(0, t), action(1, t), action(2, t)]).unwrap();
+    }
+    let mut copy = VectorEnv::new(config, 3, 1).unwrap();
+    copy.set_time_limit(Some(30)).unwrap();
+    for i in 0..3 {
+        copy.restore_env(i, &venv.env(i).snapshot(), venv.pending_reset(i), venv.elapsed(i)).unwrap();
+    }
+    for t in 37..120 {
+        let actions = [action(0, t), action(1, t), action(2, t)];
+        venv.step(&actions).unwrap();
+        copy.step(&actions).unwrap();
+        assert_eq!(venv.observations(), copy.observations(), "step {t}");
+        assert_eq!((venv.rewards(), venv.truncated()), (copy.rewards(), copy.truncated()), "step {t}");
+    }
+    let other = ChopperScape::new(Config { lives: 2, ..Config::features() }).unwrap();
+    assert!(copy.restore_env(0, &other.snapshot(), false, 0).is_err());
+}
