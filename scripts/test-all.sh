@@ -1,12 +1,22 @@
 #!/usr/bin/env bash
-# Runs every test of the project: Rust, then the command line under Xvfb, Python, and the browser.
-# Installs what the tests need (Python venv and packages, Xvfb, ffmpeg, Chromium, the wasm target) first.
-# Idempotent; quiet on success. With CI=true it never prompts.
+# Runs every test of the project: formatting, lints and the Rust tests of every crate; `play` in a real window
+# under Xvfb; the Python package under pytest; the browser page in headless Chromium.
+# It first installs what the tests need (ffmpeg, Xvfb, xdotool, Chromium, the wasm target, wasm-bindgen-cli,
+# a Python venv with the package and its test dependencies, npm packages); where it cannot (not root), it says
+# what it skipped and why. Idempotent; quiet on success; never prompts (CI runs it with CI=true).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 cd "$ROOT"
+
+# ffmpeg before the Rust tests: the CLI's .mp4 test checks real files when ffmpeg is there.
+apt_install ffmpeg || true
+
+failed=()
 for part in rust cli python web; do
-  script="scripts/test-$part.sh"
-  [ -f "$script" ] || continue
-  bash "$script"
+  bash "scripts/test-$part.sh" || failed+=("$part")
 done
+if [ ${#failed[@]} -gt 0 ]; then
+  say "FAILED: ${failed[*]} (see the output of scripts/test-<part>.sh above)"
+  exit 1
+fi
+echo "all tests passed: rust, cli, python, web"

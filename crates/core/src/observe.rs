@@ -80,7 +80,18 @@ impl Observer {
             Dtype::F32 => ObsData::F32(vec![0.0; n]),
         };
         let (stacked, newest) = (zeros(n_stacked), zeros(n_newest));
-        Observer { obs_type: config.obs_type, k, channels, canvas, renderer, stacked, newest, space, stale: true, target: Target::Canvas { copied_to: 0 } }
+        Observer {
+            obs_type: config.obs_type,
+            k,
+            channels,
+            canvas,
+            renderer,
+            stacked,
+            newest,
+            space,
+            stale: true,
+            target: Target::Canvas { copied_to: 0 },
+        }
     }
 
     pub(crate) fn space(&self) -> &BoxSpace {

@@ -85,7 +85,8 @@ impl Policy for Heuristic {
         let hazards = Hazards::of(world);
         let mut best = (i32::MIN, f32::INFINITY, Action::Noop);
         for first in Action::ALL {
-            let clear = Action::ALL.iter().map(|&then| hazards.clear_steps(world.chopper, first, then)).max().unwrap_or(0);
+            let clear =
+                Action::ALL.iter().map(|&then| hazards.clear_steps(world.chopper, first, then)).max().unwrap_or(0);
             let mut at = world.chopper;
             let (dx, dy) = first.delta();
             at.shift(dx, dy);

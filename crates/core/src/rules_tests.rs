@@ -196,7 +196,11 @@ fn aliens_fire_twenty_steps_after_they_appear_then_every_forty() {
         if g.world.missiles.len() > before {
             let a = g.world.aliens[0].body;
             let m = *g.world.missiles.last().unwrap();
-            assert_eq!((m.x, m.y, m.w, m.h), (a.x - 16 - 10, a.y + 12, 16, 8), "placed at the left edge, then moved 10");
+            assert_eq!(
+                (m.x, m.y, m.w, m.h),
+                (a.x - 16 - 10, a.y + 12, 16, 8),
+                "placed at the left edge, then moved 10"
+            );
             fired.push(step);
         }
     }

@@ -45,7 +45,8 @@ fn check(file: &str, actual: String) {
         std::fs::write(&path, &actual).unwrap();
         return;
     }
-    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}; regenerate with UPDATE_GOLDEN=1"));
+    let expected =
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}; regenerate with UPDATE_GOLDEN=1"));
     for (i, (e, a)) in expected.lines().zip(actual.lines()).enumerate() {
         assert_eq!(e, a, "{file} line {} differs", i + 1);
     }

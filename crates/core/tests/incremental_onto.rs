@@ -39,7 +39,12 @@ fn check(config: Config, steps: usize, switch_every: usize, buffers: usize) {
 
 #[test]
 fn incremental_rgb_full_size_equals_copied_frames() {
-    check(config(ObsType::Rgb, (600, 800), &[("bird_prob", "0.05"), ("alien_prob", "0.02"), ("lives", "3")]), 400, 1000, 1);
+    check(
+        config(ObsType::Rgb, (600, 800), &[("bird_prob", "0.05"), ("alien_prob", "0.02"), ("lives", "3")]),
+        400,
+        1000,
+        1,
+    );
 }
 
 #[test]
