@@ -35,7 +35,7 @@ class VectorEnv(gym.vector.VectorEnv):
     | Argument | Default | Meaning |
     |----------|---------|---------|
     | `num_threads` | CPUs, at most one per 64 envs | worker threads (results do not depend on it) |
-    | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, overwritten by the next `step`/`reset` (copy what you keep) |
+    | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, overwritten by the next `step`/`reset` (copy what you keep, and do not write into them: pixel observations are drawn incrementally onto the previous frame) |
     | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
     | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |
     | `render_mode` | `None` | `"rgb_array"`: `render()` returns a tuple of 600 × 800 × 3 frames |

@@ -183,6 +183,9 @@ impl PyVectorEnv {
         let mode = if same_step { AutoresetMode::SameStep } else { AutoresetMode::NextStep };
         let mut inner = VectorEnv::with_mode(config, num_envs, num_threads, mode).map_err(env_error)?;
         inner.set_time_limit(time_limit).map_err(env_error)?;
+        // copy=False hands out the same arrays every call, to be read and not written: pixels can be drawn
+        // incrementally onto them.
+        inner.set_persistent_observations(!copy);
         let (rewards32, fuel32, lives32) = (vec![0.0; num_envs], vec![0; num_envs], vec![0; num_envs]);
         Ok(PyVectorEnv { inner, copy, arrays: None, rewards32, fuel32, lives32 })
     }

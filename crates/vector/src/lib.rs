@@ -70,6 +70,9 @@ pub struct VectorEnv {
     started: bool,
     /// Output buffers of [`VectorEnv::reset`] / [`VectorEnv::step`], allocated on their first call.
     buffers: Option<Buffers>,
+    /// Whether `step_into`'s observation buffer persists, unmodified, between calls (see
+    /// [`VectorEnv::set_persistent_observations`]).
+    persistent: bool,
 }
 
 impl VectorEnv {
@@ -106,7 +109,17 @@ impl VectorEnv {
         let slots = vec![Slot { env, ended: false, elapsed: 0 }; num_envs];
         let num_threads = num_threads.min(num_envs);
         let pool = LazyPool::new(num_threads - 1);
-        Ok(VectorEnv { slots, obs_len, mode, num_threads, pool, time_limit: None, started: false, buffers: None })
+        Ok(VectorEnv {
+            slots,
+            obs_len,
+            mode,
+            num_threads,
+            pool,
+            time_limit: None,
+            started: false,
+            buffers: None,
+            persistent: false,
+        })
     }
 
     /// Number of environments.
@@ -117,6 +130,17 @@ impl VectorEnv {
     /// Worker threads a batch is split over (at most `num_envs`).
     pub fn num_threads(&self) -> usize {
         self.num_threads
+    }
+
+    /// Promises that the observation buffer given to [`VectorEnv::step_into`] is the same memory on every call
+    /// and that nobody modifies it between calls. Then `rgb` and `grayscale` observations (without frame
+    /// stacking) are drawn incrementally straight onto it
+    /// ([`ChopperScape::step_into_incremental`](chopperscape::ChopperScape::step_into_incremental)): only what
+    /// changed is written, instead of a whole frame per env and step. A buffer at another address is detected
+    /// and redrawn in full; a modified one is not. [`VectorEnv::step`] (the vector env's own buffers) always
+    /// works this way. Default: `false`.
+    pub fn set_persistent_observations(&mut self, persistent: bool) {
+        self.persistent = persistent;
     }
 
     /// Truncates each episode after `limit` steps exactly as Gymnasium's `TimeLimit` wrapper does: the step
@@ -284,6 +308,7 @@ impl VectorEnv {
         let space = self.single_observation_space();
         out.check(self.num_envs(), self.obs_len, space.dtype)?;
         let (obs_len, mode, limit) = (self.obs_len, self.mode, self.time_limit.unwrap_or(u32::MAX));
+        let persistent = self.persistent;
         if mode == AutoresetMode::SameStep && out.final_observations.is_none() {
             return Err(BatchError::MissingFinalObservations);
         }
@@ -305,10 +330,13 @@ impl VectorEnv {
                     cause[j] = CAUSE_NONE;
                     return;
                 }
-                let t = slot
-                    .env
-                    .step_into(actions[first + j], reborrow(&mut obs))
-                    .expect("actions, buffers and episode states were checked");
+                let action = actions[first + j];
+                let t = if persistent {
+                    slot.env.step_into_incremental(action, reborrow(&mut obs))
+                } else {
+                    slot.env.step_into(action, reborrow(&mut obs))
+                }
+                .expect("actions, buffers and episode states were checked");
                 slot.elapsed += 1;
                 let truncated_now = t.truncated || slot.elapsed >= limit;
                 rewards[j] = t.reward;
@@ -382,7 +410,10 @@ impl VectorEnv {
     /// As [`VectorEnv::step_into`]; nothing changes then.
     pub fn step(&mut self, actions: &[i64]) -> Result<(), BatchError> {
         let mut buffers = self.buffers.take().unwrap_or_else(|| self.new_buffers());
+        // The own buffers are only ever lent out read-only, so they hold the last frames unmodified.
+        let persistent = std::mem::replace(&mut self.persistent, true);
         let result = self.step_into(actions, buffers.as_mut());
+        self.persistent = persistent;
         self.buffers = Some(buffers);
         result
     }

@@ -101,8 +101,22 @@ fn more_threads_than_envs_is_fine() {
 
 #[test]
 fn same_step_resets_in_the_ending_step_and_keeps_the_final_observation() {
-    let config = short_episodes(ObsType::Features);
+    same_step_matches_singles(ObsType::Features, false);
+}
+
+#[test]
+fn persistent_caller_buffers_get_exact_incremental_frames() {
+    for obs_type in [ObsType::Grayscale, ObsType::Rgb] {
+        same_step_matches_singles(obs_type, true);
+        same_step_matches_singles(obs_type, false);
+    }
+}
+
+/// SAME_STEP batches into caller-owned buffers, checked against single envs step by step.
+fn same_step_matches_singles(obs_type: ObsType, persistent: bool) {
+    let config = Config { alien_prob: 0.05, lives: 2, ..short_episodes(obs_type) };
     let mut venv = VectorEnv::with_mode(config.clone(), 4, 2, AutoresetMode::SameStep).unwrap();
+    venv.set_persistent_observations(persistent);
     let len = venv.obs_len();
     let mut buf = venv.new_buffers();
     venv.reset_into(Some(5), buf.as_mut()).unwrap();
