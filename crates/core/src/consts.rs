@@ -47,9 +47,9 @@ pub const BIRD_PROB: f64 = 0.01;
 pub const FUEL_PROB: f64 = 0.01;
 
 /// Reward of every step.
-pub const STEP_REWARD: f32 = 1.0;
+pub const STEP_REWARD: i32 = 1;
 /// Reward of a step in which the chopper is hit.
-pub const HIT_REWARD: f32 = -10.0;
+pub const HIT_REWARD: i32 = -10;
 
 /// Steps after it appears that an alien fires its first missile.
 pub const ALIEN_FIRST_SHOT: u32 = 20;

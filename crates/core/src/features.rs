@@ -53,6 +53,8 @@ pub fn high() -> [f32; FEATURES_LEN] {
 /// Writes the features of `world` into `out` (`out.len() == FEATURES_LEN`). `lives` and `max_fuel` are the options.
 pub fn write(world: &World, lives: u32, max_fuel: u32, out: &mut [f32]) {
     let out: &mut [f32; FEATURES_LEN] = out.try_into().expect("features buffer of FEATURES_LEN values");
+    // Empty slots are zero: clear everything once (a few vector stores), then write only what is present.
+    *out = [0.0; FEATURES_LEN];
     let c = world.chopper;
     out[0] = (c.x - X_MIN) as f32 * (1.0 / (X_MAX - X_MIN - CHOPPER_SIZE.0) as f32);
     out[1] = (c.y - Y_MIN) as f32 * (1.0 / (Y_MAX - Y_MIN - CHOPPER_SIZE.1) as f32);
@@ -61,15 +63,18 @@ pub fn write(world: &World, lives: u32, max_fuel: u32, out: &mut [f32]) {
     let (birds, rest) = out[4..].split_at_mut(SLOT_LEN * BIRD_SLOTS);
     let (tanks, rest) = rest.split_at_mut(SLOT_LEN * FUEL_TANK_SLOTS);
     let (aliens, missiles) = rest.split_at_mut(SLOT_LEN * ALIEN_SLOTS);
-    nearest::<BIRD_SLOTS>(&c, world.birds.iter().copied(), birds);
-    nearest::<FUEL_TANK_SLOTS>(&c, world.fuel_tanks.iter().copied(), tanks);
-    nearest::<ALIEN_SLOTS>(&c, world.aliens.iter().map(|a| a.body), aliens);
-    nearest::<MISSILE_SLOTS>(&c, world.missiles.iter().copied(), missiles);
+    nearest::<BIRD_SLOTS, _>(&c, &world.birds, |r| *r, birds);
+    nearest::<FUEL_TANK_SLOTS, _>(&c, &world.fuel_tanks, |r| *r, tanks);
+    nearest::<ALIEN_SLOTS, _>(&c, &world.aliens, |a| a.body, aliens);
+    nearest::<MISSILE_SLOTS, _>(&c, &world.missiles, |r| *r, missiles);
 }
 
-/// Fills the `SLOTS` slots of `out` with the entities nearest the chopper.
+/// Fills the first slots of `out` (all zero) with the `SLOTS` entities nearest the chopper.
 #[inline]
-fn nearest<const SLOTS: usize>(chopper: &Rect, entities: impl Iterator<Item = Rect>, out: &mut [f32]) {
+fn nearest<const SLOTS: usize, T>(chopper: &Rect, entities: &[T], body: impl Fn(&T) -> Rect, out: &mut [f32]) {
+    if entities.is_empty() {
+        return;
+    }
     // Centres are kept doubled (whole numbers), hence the factor 2 in the scales.
     const DX_SCALE: f32 = 1.0 / (2 * (X_MAX - X_MIN)) as f32;
     const DY_SCALE: f32 = 1.0 / (2 * (Y_MAX - Y_MIN)) as f32;
@@ -78,7 +83,7 @@ fn nearest<const SLOTS: usize>(chopper: &Rect, entities: impl Iterator<Item = Re
     let mut best = [(i64::MAX, 0i32, 0i32); SLOTS];
     let mut filled = 0;
     for e in entities {
-        let (ex, ey) = e.centre2();
+        let (ex, ey) = body(e).centre2();
         let (dx, dy) = (ex - ccx, ey - ccy);
         let d = dx as i64 * dx as i64 + dy as i64 * dy as i64;
         if filled == SLOTS && d >= best[SLOTS - 1].0 {
@@ -92,12 +97,10 @@ fn nearest<const SLOTS: usize>(chopper: &Rect, entities: impl Iterator<Item = Re
         best[i] = (d, dx, dy);
         filled = (filled + 1).min(SLOTS);
     }
-    for (k, slot) in out.chunks_exact_mut(SLOT_LEN).enumerate() {
-        let (_, dx, dy) = best[k];
-        let present = k < filled;
-        slot[0] = present as u8 as f32;
-        slot[1] = if present { dx as f32 * DX_SCALE } else { 0.0 };
-        slot[2] = if present { dy as f32 * DY_SCALE } else { 0.0 };
+    for (slot, &(_, dx, dy)) in out.chunks_exact_mut(SLOT_LEN).zip(&best[..filled]) {
+        slot[0] = 1.0;
+        slot[1] = dx as f32 * DX_SCALE;
+        slot[2] = dy as f32 * DY_SCALE;
     }
 }
 

@@ -113,6 +113,13 @@ impl Observer {
 
     /// Writes the observation of `world` into `out` (already checked). `reset` starts a new stack and a full redraw.
     pub(crate) fn observe(&mut self, world: &World, config: &Config, reset: bool, out: ObsBufMut<'_>) {
+        // The hot path of the cheapest observation: straight into the caller's buffer.
+        let out = match out {
+            ObsBufMut::F32(o) if self.k == 1 && self.obs_type == ObsType::Features => {
+                return features::write(world, config.lives, config.max_fuel, o);
+            }
+            out => out,
+        };
         if self.obs_type.is_pixels() {
             if reset || self.stale || matches!(self.target, Target::Caller(_)) {
                 self.stale = false;

@@ -60,10 +60,23 @@ impl Rng {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// `true` with probability `p` (one draw, always consumed).
+    /// `true` with probability `p` (one draw, always consumed): exactly `unit() < p`.
     #[inline]
     pub fn chance(&mut self, p: f64) -> bool {
         self.unit() < p
+    }
+
+    /// `true` with the probability `threshold` stands for (see [`Rng::threshold`]): exactly `chance(p)`, in
+    /// integers (one draw, always consumed).
+    #[inline]
+    pub fn chance_below(&mut self, threshold: u64) -> bool {
+        (self.next_u64() >> 11) < threshold
+    }
+
+    /// The integer form of a probability `p` in [0, 1]: `unit() < p` ⟺ `(next_u64 >> 11) < threshold(p)`,
+    /// because `unit()` is `(next_u64 >> 11) · 2⁻⁵³` and scaling by a power of two is exact.
+    pub fn threshold(p: f64) -> u64 {
+        (p * (1u64 << 53) as f64).ceil() as u64
     }
 
     /// A uniform integer in `[0, n)`; `n` must be positive.
@@ -113,6 +126,20 @@ mod tests {
             seen[(v - 90) as usize] = true;
         }
         assert!(seen.iter().all(|&s| s));
+    }
+
+    #[test]
+    fn integer_chance_equals_float_chance() {
+        for p in [0.0, 1e-12, 0.01, 0.25, 0.5, 0.999_999, 1.0, f64::from_bits(0x3f84_7ae1_47ae_147b)] {
+            let (mut a, mut b) = (Rng::seed_from_u64(5), Rng::seed_from_u64(5));
+            let t = Rng::threshold(p);
+            for _ in 0..20_000 {
+                assert_eq!(a.chance(p), b.chance_below(t), "p = {p}");
+            }
+        }
+        // At the boundary: a draw whose unit() equals p exactly is not below it.
+        let p = 0.5;
+        assert_eq!(Rng::threshold(p), 1 << 52);
     }
 
     #[test]

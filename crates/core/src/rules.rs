@@ -44,6 +44,24 @@ pub struct Game {
     pub(crate) rng: Rng,
     /// The action applied in the last underlying step (for sticky actions); `Noop` after reset.
     pub(crate) prev_action: Action,
+    /// The options' probabilities in integer form, derived from `config` once.
+    odds: Odds,
+}
+
+/// Probabilities as [`Rng::threshold`]s, so each draw is an integer compare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Odds {
+    sticky: u64,
+    bird: u64,
+    fuel: u64,
+    alien: u64,
+}
+
+impl Odds {
+    fn of(c: &Config) -> Odds {
+        let t = Rng::threshold;
+        Odds { sticky: t(c.sticky_prob), bird: t(c.bird_prob), fuel: t(c.fuel_prob), alien: t(c.alien_prob) }
+    }
 }
 
 impl Game {
@@ -61,7 +79,13 @@ impl Game {
             lives: config.lives,
             ..World::default()
         };
-        Ok(Game { config, world, rng: Rng::seed_from_u64(0), prev_action: Action::Noop })
+        Ok(Game::from_parts(config, world, Rng::seed_from_u64(0), Action::Noop))
+    }
+
+    /// A game from its parts (for snapshots); `config` must be valid.
+    pub(crate) fn from_parts(config: Config, world: World, rng: Rng, prev_action: Action) -> Game {
+        let odds = Odds::of(&config);
+        Game { config, world, rng, prev_action, odds }
     }
 
     /// The options.
@@ -112,7 +136,7 @@ impl Game {
             Status::Terminated(Cause::Fuel) => return Err(Error::EpisodeOver("terminated: out of fuel")),
             Status::Truncated => return Err(Error::EpisodeOver("truncated at max_episode_steps")),
         }
-        let mut reward = 0.0;
+        let mut reward = 0;
         for _ in 0..self.config.frame_skip {
             reward += self.tick(action);
             if self.world.status != Status::Running {
@@ -125,17 +149,18 @@ impl Game {
             w.status = Status::Truncated;
         }
         Ok(Outcome {
-            reward,
+            reward: reward as f32,
             terminated: matches!(w.status, Status::Terminated(_)),
             truncated: w.status == Status::Truncated,
         })
     }
 
     /// One underlying step of the rules; returns its reward.
-    fn tick(&mut self, action: Action) -> f32 {
+    fn tick(&mut self, action: Action) -> i32 {
         let cfg = &self.config;
         let rng = &mut self.rng;
-        let applied = if cfg.sticky_prob > 0.0 && rng.chance(cfg.sticky_prob) { self.prev_action } else { action };
+        let odds = self.odds;
+        let applied = if cfg.sticky_prob > 0.0 && rng.chance_below(odds.sticky) { self.prev_action } else { action };
         self.prev_action = applied;
 
         let World { chopper, birds, fuel_tanks, aliens, missiles, fuel_left, episode_return, lives, status, .. } =
@@ -148,61 +173,70 @@ impl Game {
         chopper.shift(dx, dy);
 
         // 3–4 and the alien draw.
-        if rng.chance(cfg.bird_prob) {
+        if rng.chance_below(odds.bird) {
             birds.push(Rect::placed(X_MAX, rng.range(Y_MIN, Y_MAX), BIRD_SIZE));
         }
-        if rng.chance(cfg.fuel_prob) {
+        if rng.chance_below(odds.fuel) {
             fuel_tanks.push(Rect::placed(rng.range(X_MIN, X_MAX), Y_MAX, FUEL_TANK_SIZE));
         }
-        if cfg.alien_prob > 0.0 && rng.chance(cfg.alien_prob) {
+        if cfg.alien_prob > 0.0 && rng.chance_below(odds.alien) {
             aliens.push(Alien { body: Rect::placed(X_MAX, rng.range(Y_MIN, Y_MAX), ALIEN_SIZE), age: 0 });
         }
 
         let chopper = *chopper;
 
         // 5. Birds, then aliens (which may fire), then missiles.
-        birds.retain_mut(|b| {
-            if b.x <= X_MIN {
-                return false;
-            }
-            b.shift(-BIRD_SPEED, 0);
-            !(b.collides(&chopper) && hit(lives, status, &mut reward))
-        });
-        aliens.retain_mut(|a| {
-            if a.body.x <= X_MIN {
-                return false;
-            }
-            a.body.shift(-BIRD_SPEED, 0);
-            if a.body.collides(&chopper) && hit(lives, status, &mut reward) {
-                return false;
-            }
-            if a.age >= ALIEN_FIRST_SHOT && (a.age - ALIEN_FIRST_SHOT) % ALIEN_SHOT_PERIOD == 0 {
-                let (ox, oy) = MISSILE_OFFSET;
-                missiles.push(Rect::placed(a.body.x + ox, a.body.y + oy, MISSILE_SIZE));
-            }
-            a.age += 1;
-            true
-        });
-        missiles.retain_mut(|m| {
-            if m.x <= X_MIN {
-                return false;
-            }
-            m.shift(-MISSILE_SPEED, 0);
-            !(m.collides(&chopper) && hit(lives, status, &mut reward))
-        });
+        // (Each list is usually empty or nearly so: skip the retain machinery then.)
+        if !birds.is_empty() {
+            birds.retain_mut(|b| {
+                if b.x <= X_MIN {
+                    return false;
+                }
+                b.shift_left(BIRD_SPEED);
+                !(b.collides(&chopper) && hit(lives, status, &mut reward))
+            });
+        }
+        if !aliens.is_empty() {
+            aliens.retain_mut(|a| {
+                if a.body.x <= X_MIN {
+                    return false;
+                }
+                a.body.shift_left(BIRD_SPEED);
+                if a.body.collides(&chopper) && hit(lives, status, &mut reward) {
+                    return false;
+                }
+                if a.age >= ALIEN_FIRST_SHOT && (a.age - ALIEN_FIRST_SHOT) % ALIEN_SHOT_PERIOD == 0 {
+                    let (ox, oy) = MISSILE_OFFSET;
+                    missiles.push(Rect::placed(a.body.x + ox, a.body.y + oy, MISSILE_SIZE));
+                }
+                a.age += 1;
+                true
+            });
+        }
+        if !missiles.is_empty() {
+            missiles.retain_mut(|m| {
+                if m.x <= X_MIN {
+                    return false;
+                }
+                m.shift_left(MISSILE_SPEED);
+                !(m.collides(&chopper) && hit(lives, status, &mut reward))
+            });
+        }
 
         // 6. Fuel tanks.
-        fuel_tanks.retain_mut(|t| {
-            if t.y <= Y_MIN {
-                return false;
-            }
-            t.shift(0, -FUEL_TANK_SPEED);
-            if t.collides(&chopper) {
-                *fuel_left = cfg.max_fuel;
-                return false;
-            }
-            true
-        });
+        if !fuel_tanks.is_empty() {
+            fuel_tanks.retain_mut(|t| {
+                if t.y <= Y_MIN {
+                    return false;
+                }
+                t.shift_up(FUEL_TANK_SPEED);
+                if t.collides(&chopper) {
+                    *fuel_left = cfg.max_fuel;
+                    return false;
+                }
+                true
+            });
+        }
         if cfg.bird_fuel_collision == BirdFuelCollision::Destroy {
             destroy_colliding(fuel_tanks, birds, aliens);
         }
@@ -211,13 +245,13 @@ impl Game {
         if *fuel_left == 0 && *status == Status::Running {
             *status = Status::Terminated(Cause::Fuel);
         }
-        *episode_return += reward as i64;
+        *episode_return += i64::from(reward);
         reward
     }
 }
 
 /// A hit on the chopper; returns whether what hit is removed (only when a life was lost and lives remain).
-fn hit(lives: &mut u32, status: &mut Status, reward: &mut f32) -> bool {
+fn hit(lives: &mut u32, status: &mut Status, reward: &mut i32) -> bool {
     if *status != Status::Running {
         return false;
     }

@@ -78,8 +78,8 @@ fn a_new_bird_appears_at_the_clamped_right_edge_and_moves_in_the_same_step() {
 
 #[test]
 fn a_new_fuel_tank_appears_at_the_clamped_bottom_and_rises_in_the_same_step() {
-    let mut g = quiet_game(Config { fuel_prob: 1.0, ..v0() }, 100, 100);
-    g.config.fuel_prob = 1.0;
+    let mut g = Game::new(Config { bird_prob: 0.0, fuel_prob: 1.0, ..v0() }).unwrap();
+    g.reset(Some(0));
     for _ in 0..50 {
         g.step(Action::Noop).unwrap();
         let t = *g.world.fuel_tanks.last().unwrap();

@@ -249,7 +249,7 @@ fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
         steps,
         status,
     };
-    let game = Game { config, world, rng, prev_action };
+    let game = Game::from_parts(config, world, rng, prev_action);
 
     let dtype = r.u8("observation type")?;
     let n = r.count(if dtype == 1 { 4 } else { 1 }, "stacked observation")?;
