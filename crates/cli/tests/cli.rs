@@ -266,7 +266,9 @@ fn bench_json_names_every_scenario_with_a_positive_rate() {
     let v: Value = serde_json::from_str(out.trim()).unwrap();
     let scenarios = v["scenarios"].as_array().unwrap();
     let names: Vec<&str> = scenarios.iter().map(|s| s["name"].as_str().unwrap()).collect();
-    for name in ["features", "rgb_600x800", "gray_84x84", "vector_features", "vector_gray_84x84"] {
+    for name in
+        ["features", "rgb_600x800", "rgb_600x800_incremental", "gray_84x84", "vector_features", "vector_gray_84x84"]
+    {
         assert!(names.contains(&name), "{name} missing from {names:?}");
     }
     for s in scenarios {

@@ -14,15 +14,19 @@ use crate::options::GameOptions;
 use crate::progress;
 
 /// Every scenario name, as `--scenario` accepts it.
-pub const SCENARIOS: &[&str] = &["features", "rgb_600x800", "gray_84x84", "vector_features", "vector_gray_84x84"];
+pub const SCENARIOS: &[&str] =
+    &["features", "rgb_600x800", "rgb_600x800_incremental", "gray_84x84", "vector_features", "vector_gray_84x84"];
 
-/// Environments per batch in the vector scenarios.
-pub const VECTOR_ENVS: usize = 64;
+/// Environments per batch in the vector scenarios: enough that two threads pay off, few enough that a batch of
+/// 84 × 84 frames stays in cache.
+pub const VECTOR_ENVS: usize = 256;
 
 /// Measure steps per second (median of several runs).
 ///
-/// Scenarios: `features`, `rgb_600x800`, `gray_84x84` (one env, one thread, the observation of that name) and
-/// `vector_features`, `vector_gray_84x84` (64 envs stepped together, on 1 thread and on all threads). Actions
+/// Scenarios: `features`, `rgb_600x800`, `gray_84x84` (one env, one thread, the observation of that name, copied
+/// out to a buffer every step), `rgb_600x800_incremental` (the same, drawn incrementally onto the buffer with
+/// `step_into_incremental`) and `vector_features`, `vector_gray_84x84` (256 envs stepped together, on 1 thread and
+/// on all threads). Actions
 /// are a fixed pseudo-random sequence; episodes reset when they end. Build with --release for real numbers.
 #[derive(Args, Debug)]
 #[command(after_help = "Examples:\n  cargo run --release -p chopperscape-cli -- bench\n  \
@@ -97,9 +101,9 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         }
         println!("{}", serde_json::to_string(&Report { scenarios: &measured })?);
     } else {
-        println!("{:<20} {:>7} {:>16}", "scenario", "threads", "steps/s");
+        println!("{:<24} {:>7} {:>16}", "scenario", "threads", "steps/s");
         for m in &measured {
-            println!("{:<20} {:>7} {:>16.0}", m.name, m.threads, m.steps_per_sec);
+            println!("{:<24} {:>7} {:>16.0}", m.name, m.threads, m.steps_per_sec);
         }
         println!("median of {} runs of {} s each{}", args.runs, args.seconds, build_note());
     }
@@ -121,7 +125,7 @@ fn config_for(name: &str, base: &Config) -> Config {
     let mut c = base.clone();
     match name {
         "features" | "vector_features" => c.obs_type = ObsType::Features,
-        "rgb_600x800" => {
+        "rgb_600x800" | "rgb_600x800_incremental" => {
             c.obs_type = ObsType::Rgb;
             c.obs_size = (600, 800);
         }
@@ -151,13 +155,16 @@ fn scenario(name: &'static str, threads: usize, base: &Config) -> Result<Stepper
     let pixels = env.config().obs_type.is_pixels();
     let (mut u8s, mut f32s) =
         if pixels { (vec![0u8; env.obs_len()], Vec::new()) } else { (Vec::new(), vec![0f32; env.obs_len()]) };
+    let incremental = name.ends_with("_incremental");
     let mut seed = 0u64;
     let mut i = 0usize;
     env.reset_into(Some(seed), buf(pixels, &mut u8s, &mut f32s))?;
     Ok(Box::new(move || {
         const CHUNK: u64 = 256;
         for _ in 0..CHUNK {
-            let t = env.step_into(acts[i % acts.len()], buf(pixels, &mut u8s, &mut f32s)).expect("valid action");
+            let (action, out) = (acts[i % acts.len()], buf(pixels, &mut u8s, &mut f32s));
+            let t = if incremental { env.step_into_incremental(action, out) } else { env.step_into(action, out) }
+                .expect("valid action");
             i += 1;
             if t.terminated || t.truncated {
                 seed += 1;
