@@ -16,6 +16,8 @@ const N: usize = 256;
 
 fn bench_batch(bencher: Bencher, config: Config, threads: usize) {
     let mut venv = VectorEnv::new(config, N, threads).unwrap();
+    // The same buffers every batch, read and not written between batches: pixels are drawn incrementally.
+    venv.set_persistent_observations(true);
     let mut out = venv.new_buffers();
     venv.reset_into(Some(0), out.as_mut()).unwrap();
     // A fixed cycle of every action, different per environment, so choppers spread over the screen.
