@@ -19,18 +19,17 @@ for part in rust cli python web; do
 done
 
 # One closing line for the whole run, summed from each runner's own summary lines.
-passed=$(grep -oE '^test result: [a-zA-Z]+\. [0-9]+ passed' "$log" | grep -oE '[0-9]+ passed' | awk '{s+=$1} END {print s+0}')
-fails=$(grep -oE '^test result: [a-zA-Z]+\. [0-9]+ passed; [0-9]+ failed' "$log" | grep -oE '[0-9]+ failed' | awk '{s+=$1} END {print s+0}')
-py_passed=$(grep -oE '^[0-9]+ passed' "$log" | awk '{s+=$1} END {print s+0}')
-py_failed=$(grep -oE '^[0-9]+ failed|, [0-9]+ failed' "$log" | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}')
-web_passed=$(grep -oE 'ℹ pass [0-9]+' "$log" | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}')
-web_failed=$(grep -oE 'ℹ fail [0-9]+' "$log" | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}')
-window=$(grep -c '^play under Xvfb: ok' "$log" || true)
-total_passed=$((passed + py_passed + web_passed + window))
-total_failed=$((fails + py_failed + web_failed + ${#failed[@]}))
+# count LINES WHAT: the sum of the numbers in WHAT (e.g. "[0-9]+ passed") on the log lines matching LINES.
+count() { { grep -E "$1" "$log" || true; } | { grep -oE "$2" || true; } | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}'; }
+cargo='^test result:'
+pytest='^[0-9]+ (passed|failed)'
+node='ℹ (pass|fail) [0-9]+'
+passed=$(($(count "$cargo" '[0-9]+ passed') + $(count "$pytest" '[0-9]+ passed') + $(count "$node" 'pass [0-9]+')))
+failures=$(($(count "$cargo" '[0-9]+ failed') + $(count "$pytest" '[0-9]+ failed') + $(count "$node" 'fail [0-9]+')))
+passed=$((passed + $(grep -c '^play under Xvfb: ok' "$log" || true)))
 if [ ${#failed[@]} -gt 0 ]; then
   say "FAILED: ${failed[*]} (see the output of scripts/test-<part>.sh above)"
-  echo "$total_passed passed, $total_failed failed"
+  echo "$passed passed, $((failures > 0 ? failures : ${#failed[@]})) failed"
   exit 1
 fi
-echo "$total_passed passed, 0 failed"
+echo "$passed passed, 0 failed"
