@@ -135,16 +135,7 @@ impl ChopperScape {
     /// An invalid action, a buffer that does not fit, a step before `reset` or after the episode ended;
     /// nothing changes then.
     pub fn step_into(&mut self, action: i64, out: ObsBufMut<'_>) -> Result<Transition, Error> {
-        let action = Action::try_from(action)?;
-        self.observer.check(&out)?;
-        let outcome = self.game.step(action)?;
-        self.observer.observe(self.game.world(), self.game.config(), false, out);
-        Ok(Transition {
-            reward: outcome.reward,
-            terminated: outcome.terminated,
-            truncated: outcome.truncated,
-            info: self.info(),
-        })
+        self.advance(action, out, false)
     }
 
     /// Like [`ChopperScape::step_into`], but for `rgb` and `grayscale` observations with `frame_stack = 1` it
@@ -159,10 +150,21 @@ impl ChopperScape {
     /// # Errors
     /// As [`ChopperScape::step_into`]; nothing changes then.
     pub fn step_into_incremental(&mut self, action: i64, out: ObsBufMut<'_>) -> Result<Transition, Error> {
+        self.advance(action, out, true)
+    }
+
+    /// One step: checks, the rules, then the observation, copied (`step_into`) or drawn onto `out`.
+    #[inline]
+    fn advance(&mut self, action: i64, out: ObsBufMut<'_>, onto: bool) -> Result<Transition, Error> {
         let action = Action::try_from(action)?;
         self.observer.check(&out)?;
         let outcome = self.game.step(action)?;
-        self.observer.observe_onto(self.game.world(), self.game.config(), out);
+        let (world, config) = (self.game.world(), self.game.config());
+        if onto {
+            self.observer.observe_onto(world, config, out);
+        } else {
+            self.observer.observe(world, config, false, out);
+        }
         Ok(Transition {
             reward: outcome.reward,
             terminated: outcome.terminated,
