@@ -31,7 +31,8 @@ pub(crate) struct Observer {
     channels: usize,
     /// The frame the renderer draws into, incrementally (pixel types only): RGB, or gray for `grayscale`.
     canvas: Vec<u8>,
-    renderer: Renderer,
+    /// The renderer of pixel observations; `None` for `features`, which draw nothing.
+    renderer: Option<Renderer>,
     /// The stacked observation (`k > 1` only), in output layout.
     stacked: ObsData,
     /// Scratch for the newest unstacked observation (`k > 1` only).
@@ -57,13 +58,16 @@ impl Observer {
         let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
         let k = config.frame_stack as usize;
         let format = if config.obs_type == ObsType::Grayscale { PixelFormat::Gray } else { PixelFormat::Rgb };
-        let renderer = Renderer::with_format(config.obs_size.0, config.obs_size.1, config.hud, format);
+        let renderer = config
+            .obs_type
+            .is_pixels()
+            .then(|| Renderer::with_format(config.obs_size.0, config.obs_size.1, config.hud, format));
         let (single_len, channels) = match config.obs_type {
             ObsType::Features => (FEATURES_LEN, FEATURES_LEN),
             ObsType::Rgb | ObsType::RgbFloat => (h * w * 3, 3),
             ObsType::Grayscale => (h * w, 1),
         };
-        let canvas = if config.obs_type.is_pixels() { vec![255; renderer.frame_len()] } else { Vec::new() };
+        let canvas = renderer.as_ref().map_or_else(Vec::new, |r| vec![255; r.frame_len()]);
         let space = match config.obs_type {
             ObsType::Features => {
                 let (lo, hi) = (features::low(), features::high());
@@ -120,12 +124,12 @@ impl Observer {
             }
             out => out,
         };
-        if self.obs_type.is_pixels() {
+        if let Some(renderer) = self.renderer.as_mut() {
             if reset || self.stale || matches!(self.target, Target::Caller(_)) {
                 self.stale = false;
-                self.renderer.draw_full(world, config.lives, &mut self.canvas);
+                renderer.draw_full(world, config.lives, &mut self.canvas);
             } else {
-                self.renderer.draw(world, config.lives, &mut self.canvas);
+                renderer.draw(world, config.lives, &mut self.canvas);
             }
         }
         if self.k == 1 {
@@ -178,11 +182,12 @@ impl Observer {
                 Target::Canvas { copied_to } => copied_to == addr,
                 Target::Caller(at) => at == addr,
             };
+        let renderer = self.renderer.as_mut().expect("pixel observations have a renderer");
         if holds_last_frame {
-            self.renderer.draw(world, config.lives, o);
+            renderer.draw(world, config.lives, o);
         } else {
             self.stale = false;
-            self.renderer.draw_full(world, config.lives, o);
+            renderer.draw_full(world, config.lives, o);
         }
         self.target = Target::Caller(addr);
     }
