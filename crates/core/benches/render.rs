@@ -37,31 +37,19 @@ fn setup(options: &[(&str, &str)]) -> (ChopperScape, Vec<u8>, Vec<f32>) {
 
 use chopperscape::Env as _;
 
-/// Steps `env` repeatedly with actions 0, 1, 2, 3, 4, 0, …, resetting at the end of each episode.
-fn bench_steps(bencher: Bencher, options: &[(&str, &str)]) {
+/// Steps `env` repeatedly with actions 0, 1, 2, 3, 4, 0, …, resetting at the end of each episode; with
+/// `incremental`, through `step_into_incremental` (only what changed is drawn onto the caller's buffer).
+fn bench_steps(bencher: Bencher, options: &[(&str, &str)], incremental: bool) {
     let (mut env, mut bytes, mut floats) = setup(options);
     let is_u8 = !bytes.is_empty();
     let mut t = 0i64;
     bencher.counter(ItemsCount::new(1usize)).bench_local(|| {
         t += 1;
         let out = if is_u8 { ObsBufMut::U8(&mut bytes) } else { ObsBufMut::F32(&mut floats) };
-        let tr = env.step_into(t % 5, out).unwrap();
+        let tr = if incremental { env.step_into_incremental(t % 5, out) } else { env.step_into(t % 5, out) }.unwrap();
         if tr.terminated || tr.truncated {
             let out = if is_u8 { ObsBufMut::U8(&mut bytes) } else { ObsBufMut::F32(&mut floats) };
             env.reset_into(None, out).unwrap();
-        }
-    });
-}
-
-/// Like `bench_steps`, through `step_into_incremental`: only what changed is drawn onto the caller's buffer.
-fn bench_steps_incremental(bencher: Bencher, options: &[(&str, &str)]) {
-    let (mut env, mut bytes, _) = setup(options);
-    let mut t = 0i64;
-    bencher.counter(ItemsCount::new(1usize)).bench_local(|| {
-        t += 1;
-        let tr = env.step_into_incremental(t % 5, ObsBufMut::U8(&mut bytes)).unwrap();
-        if tr.terminated || tr.truncated {
-            env.reset_into(None, ObsBufMut::U8(&mut bytes)).unwrap();
         }
     });
 }
@@ -70,43 +58,43 @@ fn bench_steps_incremental(bencher: Bencher, options: &[(&str, &str)]) {
 /// whole-frame copy.
 #[divan::bench]
 fn rgb_600x800_incremental(bencher: Bencher) {
-    bench_steps_incremental(bencher, &[]);
+    bench_steps(bencher, &[], true);
 }
 
 /// `grayscale` at 84 × 84, drawn onto the caller's buffer.
 #[divan::bench]
 fn gray_84x84_incremental(bencher: Bencher) {
-    bench_steps_incremental(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")]);
+    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")], true);
 }
 
 /// `rgb` at 600 × 800 (the default): one step plus the 1.44 MB copy out.
 #[divan::bench]
 fn rgb_600x800(bencher: Bencher) {
-    bench_steps(bencher, &[]);
+    bench_steps(bencher, &[], false);
 }
 
 /// `grayscale` at 84 × 84: one step plus the 7 KB copy out.
 #[divan::bench]
 fn gray_84x84(bencher: Bencher) {
-    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")]);
+    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")], false);
 }
 
 /// `grayscale` at 84 × 84 stacked 4 deep (the Atari-style setting).
 #[divan::bench]
 fn gray_84x84_stack4(bencher: Bencher) {
-    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84"), ("frame_stack", "4")]);
+    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84"), ("frame_stack", "4")], false);
 }
 
 /// `rgb` at 84 × 84.
 #[divan::bench]
 fn rgb_84x84(bencher: Bencher) {
-    bench_steps(bencher, &[("obs_size", "84x84")]);
+    bench_steps(bencher, &[("obs_size", "84x84")], false);
 }
 
 /// `rgb_float` at 84 × 84.
 #[divan::bench]
 fn rgb_float_84x84(bencher: Bencher) {
-    bench_steps(bencher, &[("obs_type", "rgb_float"), ("obs_size", "84x84")]);
+    bench_steps(bencher, &[("obs_type", "rgb_float"), ("obs_size", "84x84")], false);
 }
 
 /// The game alone, for reference: `features` observations, no pixels.

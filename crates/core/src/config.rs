@@ -211,7 +211,7 @@ impl Config {
                 let (h, w) = v.split_once(['x', ',']).ok_or_else(|| out_of_range("obs_size", v, allowed))?;
                 next.obs_size = (parse("obs_size", h, allowed)?, parse("obs_size", w, allowed)?);
             }
-            "frame_stack" => next.frame_stack = parse(name_of(name), v, "an integer in 1..=64")?,
+            "frame_stack" => next.frame_stack = parse("frame_stack", v, "an integer in 1..=64")?,
             "hud" => next.hud = parse("hud", v, "true or false")?,
             "lives" => next.lives = parse("lives", v, "an integer in 1..=1000")?,
             "bird_fuel_collision" => next.bird_fuel_collision = v.parse()?,
@@ -234,28 +234,6 @@ impl Config {
         *self = next;
         Ok(())
     }
-
-    /// Whether two configs play by the same rules (observation settings aside).
-    pub fn same_rules(&self, other: &Config) -> bool {
-        let rules = |c: &Config| {
-            (
-                c.lives,
-                c.bird_fuel_collision,
-                c.alien_prob.to_bits(),
-                c.frame_skip,
-                c.sticky_prob.to_bits(),
-                c.bird_prob.to_bits(),
-                c.fuel_prob.to_bits(),
-                c.max_fuel,
-                c.max_episode_steps,
-            )
-        };
-        rules(self) == rules(other)
-    }
-}
-
-fn name_of(name: &str) -> &'static str {
-    OPTION_NAMES.iter().find(|n| **n == name).copied().unwrap_or("option")
 }
 
 #[cfg(test)]

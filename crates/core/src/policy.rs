@@ -11,8 +11,7 @@
 
 use crate::action::Action;
 use crate::consts::{
-    ALIEN_FIRST_SHOT, ALIEN_SHOT_PERIOD, BIRD_SPEED, CHOPPER_SPEED, FUEL_TANK_SPEED, MISSILE_OFFSET, MISSILE_SIZE,
-    MISSILE_SPEED, X_MIN, Y_MAX, Y_MIN,
+    BIRD_SPEED, CHOPPER_SPEED, FUEL_TANK_SPEED, MISSILE_OFFSET, MISSILE_SIZE, MISSILE_SPEED, X_MIN, Y_MAX, Y_MIN,
 };
 use crate::geometry::Rect;
 use crate::rng::Rng;
@@ -143,13 +142,8 @@ impl Hazards {
         world.missiles.iter().for_each(|&m| push(Path { start: m, speed: MISSILE_SPEED, from: 0 }));
         for a in &world.aliens {
             push(Path { start: a.body, speed: BIRD_SPEED, from: 0 });
-            // Its next missile: fired at age 20, 60, …, from where the alien is then.
-            let next = if a.age <= ALIEN_FIRST_SHOT {
-                ALIEN_FIRST_SHOT
-            } else {
-                ALIEN_FIRST_SHOT + (a.age - ALIEN_FIRST_SHOT).div_ceil(ALIEN_SHOT_PERIOD) * ALIEN_SHOT_PERIOD
-            };
-            let wait = (next - a.age) as i32 + 1;
+            // Its next missile, fired from where the alien is then.
+            let wait = a.steps_to_next_shot() as i32 + 1;
             if wait <= LOOKAHEAD {
                 let (ox, oy) = MISSILE_OFFSET;
                 let missile = Rect::placed(a.body.x - BIRD_SPEED * wait + ox, a.body.y + oy, MISSILE_SIZE);

@@ -3,6 +3,7 @@
 //! A [`World`] is plain data. The rules ([`crate::Game`]) change it; the renderer and the features
 //! observation only read it.
 
+use crate::consts::{ALIEN_FIRST_SHOT, ALIEN_SHOT_PERIOD};
 use crate::geometry::Rect;
 
 /// An alien bird: a box plus its age, which decides when it fires.
@@ -12,6 +13,22 @@ pub struct Alien {
     pub body: Rect,
     /// Steps since it appeared: 0 in the step it appears. It fires when `age == 20`, `60`, `100`, …
     pub age: u32,
+}
+
+impl Alien {
+    /// Whether it fires in this step: at age 20, 60, 100, … (`ALIEN_FIRST_SHOT`, then every `ALIEN_SHOT_PERIOD`).
+    pub fn fires_now(&self) -> bool {
+        self.age >= ALIEN_FIRST_SHOT && (self.age - ALIEN_FIRST_SHOT) % ALIEN_SHOT_PERIOD == 0
+    }
+
+    /// Steps from now until it fires next (0 when it fires in this step).
+    pub fn steps_to_next_shot(&self) -> u32 {
+        if self.age <= ALIEN_FIRST_SHOT {
+            ALIEN_FIRST_SHOT - self.age
+        } else {
+            (ALIEN_SHOT_PERIOD - (self.age - ALIEN_FIRST_SHOT) % ALIEN_SHOT_PERIOD) % ALIEN_SHOT_PERIOD
+        }
+    }
 }
 
 /// Why an episode terminated.
@@ -79,4 +96,21 @@ pub struct World {
     pub steps: u32,
     /// Where the episode stands.
     pub status: Status,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aliens_fire_at_twenty_then_every_forty_steps() {
+        let fires: Vec<u32> = (0..150).filter(|&age| Alien { body: Rect::default(), age }.fires_now()).collect();
+        assert_eq!(fires, [20, 60, 100, 140]);
+        for age in 0..150 {
+            let a = Alien { body: Rect::default(), age };
+            let next = Alien { age: age + a.steps_to_next_shot(), ..a };
+            assert!(next.fires_now(), "age {age}");
+            assert!((age..next.age).all(|g| !Alien { age: g, ..a }.fires_now()), "age {age}");
+        }
+    }
 }
