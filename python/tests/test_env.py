@@ -53,7 +53,7 @@ def test_registration_has_time_limit_and_vector_entry_point():
 def test_step_returns_python_float_and_bools_and_int_infos():
     env = gym.make("ChopperScape-v0", obs_type="features")
     obs, info = env.reset(seed=1)
-    assert obs.dtype == np.float32 and obs.shape == (34,)
+    assert obs.dtype == np.float32 and obs.shape == (46,)
     assert info == {"fuel": 1000, "lives": 1}
     obs, reward, terminated, truncated, info = env.step(np.int64(4))
     assert type(reward) is float and reward == 1.0

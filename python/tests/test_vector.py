@@ -91,7 +91,7 @@ def test_make_vec_builds_the_native_env_with_the_registered_time_limit():
     assert envs.unwrapped.max_episode_steps == 10_000 and envs.unwrapped.num_threads == 2
     assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
     assert envs.single_observation_space == gym.make("ChopperScape-v0", obs_type="features").observation_space
-    assert envs.observation_space.shape == (4, 34)
+    assert envs.observation_space.shape == (4, 46)
     assert envs.single_action_space == gym.spaces.Discrete(5)
     assert envs.action_space == gym.spaces.MultiDiscrete([5] * 4)
     obs, info = envs.reset(seed=0)

@@ -38,7 +38,7 @@ fn run(bencher: Bencher, config: Config) {
 
 #[divan::bench]
 fn features(bencher: Bencher) {
-    assert_eq!(FEATURES_LEN, 34);
+    assert_eq!(FEATURES_LEN, 46);
     run(bencher, Config::features());
 }
 

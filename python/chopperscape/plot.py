@@ -1,0 +1,86 @@
+"""Draws learning curves from progress CSVs (``python -m chopperscape.train``, the RLlib example) into a PNG.
+
+    python -m chopperscape.plot runs/ppo/progress.csv runs/rllib/progress.csv --out docs/learning_curve.png \\
+        --label "PPO recipe" --label "RLlib PPO" --hline random=600 --hline heuristic=5750
+
+Each CSV has the columns ``env_steps,wall_s,episodes,mean_return,std_return,mean_length``. The left panel plots the
+mean return (last 100 episodes, with ± one std as a band) against env steps, the right one against wall-clock
+minutes. Needs matplotlib.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from pathlib import Path
+
+COLUMNS = ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
+
+
+def read(path: Path) -> dict[str, list[float]]:
+    """The columns of one progress CSV as float lists; `ValueError` naming the file if a column is missing."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise ValueError(f"{path}: no rows")
+    missing = [c for c in COLUMNS if c not in rows[0]]
+    if missing:
+        raise ValueError(f"{path}: missing columns {missing} (expected {','.join(COLUMNS)})")
+    return {c: [float(r[c]) for r in rows] for c in COLUMNS}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m chopperscape.plot", description=__doc__.splitlines()[0])
+    p.add_argument("csv", nargs="+", type=Path)
+    p.add_argument("--out", type=Path, required=True, help="PNG to write")
+    p.add_argument("--label", action="append", default=[], help="one per CSV, in order (default: the folder name)")
+    p.add_argument("--hline", action="append", default=[], metavar="NAME=RETURN", help="a reference line")
+    p.add_argument("--title", default="ChopperScape-v0: mean return of the last 100 episodes")
+    a = p.parse_args(argv)
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("error: the plot needs matplotlib: pip install matplotlib", file=sys.stderr)
+        return 2
+    if a.label and len(a.label) != len(a.csv):
+        p.error(f"{len(a.label)} --label for {len(a.csv)} CSV files: give one per file or none")
+    try:
+        runs = [read(path) for path in a.csv]
+    except (OSError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    labels = a.label or [path.parent.name or path.stem for path in a.csv]
+    fig, (ax_steps, ax_time) = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    for run, label in zip(runs, labels):
+        lo = [m - s for m, s in zip(run["mean_return"], run["std_return"])]
+        hi = [m + s for m, s in zip(run["mean_return"], run["std_return"])]
+        steps = [s / 1e6 for s in run["env_steps"]]
+        minutes = [w / 60 for w in run["wall_s"]]
+        for ax, x in ((ax_steps, steps), (ax_time, minutes)):
+            (line,) = ax.plot(x, run["mean_return"], label=label)
+            ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.15, linewidth=0)
+    for item in a.hline:
+        name, _, value = item.partition("=")
+        for ax in (ax_steps, ax_time):
+            ax.axhline(float(value), linestyle="--", color="grey", linewidth=1)
+        ax_steps.annotate(name, (0, float(value)), xytext=(3, 3), textcoords="offset points", color="grey")
+    ax_steps.set_xlabel("env steps (millions)")
+    ax_time.set_xlabel("wall-clock minutes (2-core machine)")
+    ax_steps.set_ylabel("mean return")
+    ax_steps.legend(loc="upper left")
+    for ax in (ax_steps, ax_time):
+        ax.grid(alpha=0.3)
+    fig.suptitle(a.title)
+    fig.tight_layout()
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(a.out, dpi=110)
+    print(a.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

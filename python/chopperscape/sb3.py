@@ -1,0 +1,171 @@
+"""Stable-Baselines3 adapter: the native batch as an SB3 `VecEnv`, with SB3's own semantics.
+
+    from stable_baselines3 import PPO
+    from chopperscape.sb3 import ChopperScapeVecEnv
+
+    env = ChopperScapeVecEnv(16, obs_type="features", seed=0)
+    model = PPO("MlpPolicy", env).learn(100_000)
+
+It behaves as ``make_vec_env("ChopperScape-v0", n_envs=N, seed=s)`` does (``DummyVecEnv`` over ``Monitor``-wrapped
+envs), trajectory for trajectory, but steps every environment in one Rust call:
+
+- ``step`` returns ``dones = terminated | truncated``; a finished environment is reset in the same step, its reset
+  observation is returned, and its last observation is in ``infos[i]["terminal_observation"]`` (no phantom
+  transition: SB3 never sees Gymnasium's NEXT_STEP reset step);
+- ``infos[i]["TimeLimit.truncated"]`` is ``truncated and not terminated``; ``infos[i]`` also has ``fuel``,
+  ``lives``, ``cause`` (on termination) and, at an episode's end, ``episode = {"r", "l", "t"}`` as SB3's ``Monitor``
+  writes it, so ``PPO``'s ``ep_rew_mean`` logging works without a wrapper;
+- ``seed(s)`` (what SB3 calls) seeds environment ``i`` with ``s + i`` at the next ``reset``; autoresets continue each
+  environment's own generator, as ``DummyVecEnv`` resets do.
+
+Pixel observations: SB3's ``CnnPolicy`` wants a channel axis; ``obs_type="grayscale"`` with ``keep_dim=True`` (the
+default here) gives ``(H, W, 1)`` (``(H, W, k)`` with ``frame_stack=k``), which SB3 transposes to channels-first
+itself.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Iterable, Sequence
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+
+try:
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+except ImportError as err:  # pragma: no cover - exercised only without SB3
+    raise ImportError("chopperscape.sb3 needs Stable-Baselines3: pip install stable-baselines3") from err
+
+from .vector import VectorEnv
+
+
+class ChopperScapeVecEnv(VecEnv):
+    """`num_envs` ChopperScape environments as one SB3 `VecEnv` (see the module docs).
+
+    Every option of ``ChopperScapeEnv`` is a keyword (``obs_type``, ``lives``, ``frame_skip``…), plus
+    ``num_threads`` and ``max_episode_steps`` (default 10,000, as the registered env) of ``VectorEnv``, ``seed``
+    (the seed of the first reset; ``None`` draws one) and ``keep_dim`` (grayscale with a channel axis, default
+    ``True``).
+    """
+
+    def __init__(
+        self,
+        num_envs: int,
+        seed: int | None = None,
+        keep_dim: bool = True,
+        render_mode: str | None = None,
+        **options: Any,
+    ):
+        if not isinstance(keep_dim, bool):
+            raise ValueError(f"invalid value {keep_dim!r} for option `keep_dim`: allowed True or False")
+        self.venv = VectorEnv(
+            num_envs, autoreset_mode=AutoresetMode.SAME_STEP, copy=True, render_mode=render_mode, **options
+        )
+        space = self.venv.single_observation_space
+        self._add_channel = keep_dim and len(space.shape) == 2
+        if self._add_channel:
+            space = gym.spaces.Box(0, 255, (*space.shape, 1), np.uint8)
+        self.render_mode = render_mode
+        super().__init__(self.venv.num_envs, space, self.venv.single_action_space)
+        self.metadata = self.venv.metadata
+        self._actions: np.ndarray | None = None
+        self._ep_return = np.zeros(self.num_envs, np.float64)
+        self._ep_len = np.zeros(self.num_envs, np.int64)
+        self._t0 = time.perf_counter()
+        if seed is not None:
+            self.seed(seed)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        return obs[..., None] if self._add_channel else obs
+
+    def reset(self) -> np.ndarray:
+        seeds = self._seeds
+        if all(s is None for s in seeds):
+            obs, info = self.venv.reset()
+        else:
+            obs, info = self.venv.reset(seed=list(seeds))
+        if self._options and any(self._options):
+            raise ValueError("ChopperScape's reset takes no options (set_options must be empty)")
+        self._reset_seeds()
+        self._reset_options()
+        self._ep_return[:] = 0
+        self._ep_len[:] = 0
+        self.reset_infos = [{"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i])} for i in range(self.num_envs)]
+        return self._obs(obs)
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = np.asarray(actions).reshape(self.num_envs)
+
+    def step_wait(self):
+        if self._actions is None:
+            raise RuntimeError("step_wait() called without step_async()")
+        obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
+        self._actions = None
+        dones = terminated | truncated
+        self._ep_return += rewards
+        self._ep_len += 1
+        ended = info.get("_final_obs")
+        final_info = info.get("final_info", {})
+        infos: list[dict[str, Any]] = []
+        for i in range(self.num_envs):
+            if dones[i]:
+                d: dict[str, Any] = {
+                    "fuel": int(final_info["fuel"][i]),
+                    "lives": int(final_info["lives"][i]),
+                    "TimeLimit.truncated": bool(truncated[i] and not terminated[i]),
+                    "terminal_observation": self._obs(info["final_obs"][i]),
+                    "episode": {
+                        "r": float(self._ep_return[i]),
+                        "l": int(self._ep_len[i]),
+                        "t": round(time.perf_counter() - self._t0, 6),
+                    },
+                }
+                if "_cause" in final_info and final_info["_cause"][i]:
+                    d["cause"] = str(final_info["cause"][i])
+                self._ep_return[i], self._ep_len[i] = 0.0, 0
+            else:
+                d = {"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i]), "TimeLimit.truncated": False}
+            infos.append(d)
+        assert ended is None or bool((ended == dones).all())
+        return self._obs(obs), rewards.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        if self.render_mode != "rgb_array":
+            return [None] * self.num_envs
+        return list(self.venv.render())
+
+    # The attribute API of VecEnv. There is one native env, not N Python objects: attributes are the batch's.
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        return [getattr(self.venv, attr_name) for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        raise AttributeError(
+            f"cannot set `{attr_name}`: the environments of a ChopperScapeVecEnv are one native batch; "
+            "make a new ChopperScapeVecEnv with other options instead"
+        )
+
+    def env_method(self, method_name: str, *method_args: Any, indices: Any = None, **method_kwargs: Any) -> list[Any]:
+        if method_name == "get_action_meanings":
+            return [self.venv.get_action_meanings() for _ in self._get_indices(indices)]
+        if method_name == "env_state":
+            return [self.venv.env_state(i) for i in self._get_indices(indices)]
+        raise AttributeError(
+            f"env_method({method_name!r}) is not supported: allowed 'get_action_meanings', 'env_state'"
+        )
+
+    def env_is_wrapped(self, wrapper_class: type[gym.Wrapper], indices: Any = None) -> list[bool]:
+        # Episode statistics are written as Monitor writes them, so SB3's evaluate_policy may treat it as wrapped.
+        from stable_baselines3.common.monitor import Monitor
+
+        return [wrapper_class is Monitor for _ in self._get_indices(indices)]
+
+    def _get_indices(self, indices: Any) -> Iterable[int]:
+        if indices is None:
+            return range(self.num_envs)
+        if isinstance(indices, int):
+            return [indices]
+        return indices
