@@ -21,6 +21,11 @@ PY=.venv/bin/python
 quiet "$PY" -m pip install --disable-pip-version-check -q "maturin>=1.9.4,<2" "gymnasium>=1.1" numpy "pytest>=7"
 "$PY" -c "import pygame" >/dev/null 2>&1 || quiet "$PY" -m pip install --disable-pip-version-check -q pygame \
   || say "skipped: pygame (render_mode=\"human\" is tested as unavailable instead)"
+# The learning tool chain (the PPO recipe, the SB3 adapter, the plot): torch from PyPI (about 5 GB with its CUDA
+# libraries, ~2 minutes on a fresh machine; the CPU is all the recipe uses), Stable-Baselines3, matplotlib.
+"$PY" -c "import torch, stable_baselines3, matplotlib" >/dev/null 2>&1 \
+  || quiet "$PY" -m pip install --disable-pip-version-check -q torch "stable-baselines3>=2.4" matplotlib \
+  || say "skipped: torch / stable-baselines3 / matplotlib could not be installed; the learning tests are skipped"
 
 # Rebuild the extension only when something it is built from changed.
 stamp=.venv/.chopperscape-build
