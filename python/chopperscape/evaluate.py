@@ -93,6 +93,9 @@ def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
 
     from .train import Agent, ObsNormalizer, RunningMeanStd
 
+    # One thread: a small MLP gains nothing from more, and OpenMP spinning under load can slow it by 100x.
+    torch.set_num_threads(1)
+
     try:
         payload = torch.load(path, map_location="cpu", weights_only=False)
     except Exception as err:

@@ -50,7 +50,7 @@ class Recipe:
     env_options: dict[str, Any] = field(default_factory=dict)
     num_envs: int = 64
     num_steps: int = 256
-    gamma: float = 0.995
+    gamma: float = 0.999
     gae_lambda: float = 0.95
     learning_rate: float = 3e-4
     anneal_lr: bool = True
@@ -246,7 +246,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None, total_steps: int | N
                     r = r / math.sqrt(ret_rms.var + 1e-8)
                     disc_return[done] = 0.0
                 buf_rew[t] = torch.from_numpy(np.where(valid, r, 0.0).astype(np.float32))
-                # Truncation is treated as termination (10,000 steps at γ = 0.995 is far beyond the horizon).
+                # Truncation is treated as termination (10,000 steps is ten horizons of γ = 0.999).
                 buf_done[t] = torch.from_numpy(done.astype(np.float32))
                 next_done = done
                 next_obs = torch.from_numpy(obs_norm(raw, update=True))
