@@ -13,6 +13,7 @@ mod output;
 #[cfg(feature = "window")]
 mod overlay;
 mod progress;
+mod server;
 #[cfg(feature = "window")]
 mod window;
 
