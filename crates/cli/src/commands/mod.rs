@@ -16,6 +16,11 @@ pub fn policy_parser() -> PossibleValuesParser {
     PossibleValuesParser::new(chopperscape::policy::NAMES)
 }
 
+/// A clap parser for a seed, whose message gives the range.
+pub fn seed_parser(s: &str) -> Result<u64, String> {
+    s.trim().parse().map_err(|_| format!("{s} is not a seed: give a whole number in 0..={}", u64::MAX))
+}
+
 /// The header of the episode table.
 pub fn table_header() -> String {
     format!("{:>7}  {:>6}  {:>6}  {:>7}  {}", "episode", "seed", "steps", "return", "cause")

@@ -23,7 +23,7 @@ pub const DIST: &str = "web/dist";
 chopperscape web --port 9000\n  chopperscape web --host 0.0.0.0 --dir web/dist")]
 pub struct WebArgs {
     /// Port to listen on (0: any free port)
-    #[arg(long, default_value_t = 8000)]
+    #[arg(long, default_value_t = 8000, allow_negative_numbers = true)]
     pub port: u16,
     /// Address to listen on; other machines can reach the page only if you give one
     #[arg(long, default_value = "127.0.0.1")]
@@ -67,14 +67,14 @@ pub fn run(args: WebArgs) -> Result<ExitCode> {
         TcpListener::bind(&addrs[..]).with_context(|| format!("cannot listen on {}:{}", args.host, args.port))?;
     let addr = listener.local_addr().context("the server has an address")?;
     if !server::is_loopback(&[addr]) {
-        eprintln!(
+        crate::note!(
             "warning: listening on {}, which is not a loopback address: any machine that can reach this one can \
              load every file in {}; use --host 127.0.0.1 to keep it to this machine",
             addr.ip(),
             dir.display()
         );
     }
-    println!("serving {} at http://{addr}/ (Ctrl-C to stop)", dir.display());
+    crate::say!("serving {} at http://{addr}/ (Ctrl-C to stop)", dir.display())?;
     server::serve(listener, &dir)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -24,7 +24,7 @@ impl Throttled {
         self.unreported += 1;
         let now = Instant::now();
         if self.last.is_none_or(|t| now.duration_since(t) >= Self::EVERY) {
-            eprintln!("{}", line(self.unreported));
+            crate::note!("{}", line(self.unreported));
             self.unreported = 0;
             self.last = Some(now);
         }
