@@ -8,7 +8,7 @@ use chopperscape::Config;
 use clap::{Args, ValueEnum};
 use serde_json::json;
 
-use super::{policy_parser, summary, table_header, table_row};
+use super::{Tally, policy_parser, table_header, table_row};
 use crate::episode::{EpisodeResult, play_policy, replay_actions};
 use crate::media::{Recorder, open_video};
 use crate::options::GameOptions;
@@ -90,29 +90,30 @@ pub fn run(args: DemoArgs) -> Result<ExitCode> {
     let config = args.options.apply(Config::default())?;
 
     let bar = progress::bar(u64::from(args.episodes), "playing", args.json);
-    let keep_actions = render != Render::None;
+    // Only a recording or a window replays the episodes; otherwise nothing of them is kept but the tally.
+    let keep = render != Render::None;
     let mut results = Vec::new();
+    let mut tally = Tally::default();
     if !args.json {
         bar.suspend(|| crate::say!("{}", table_header()))?;
     }
     for i in 0..u64::from(args.episodes) {
-        let mut e = play_policy(&config, &args.policy, args.seed.wrapping_add(i), |_| Ok(()))?;
-        if !keep_actions {
-            // Nothing replays them: do not hold every episode's actions.
-            e.actions = Vec::new();
-        }
+        let e = play_policy(&config, &args.policy, args.seed.wrapping_add(i), |_| Ok(()))?;
+        tally.add(&e);
         let line = if args.json {
             json!({"episode": i, "seed": e.seed, "steps": e.steps, "return": e.ret, "cause": e.cause}).to_string()
         } else {
             table_row(i as usize, &e)
         };
         bar.suspend(|| crate::say!("{line}"))?;
-        results.push(e);
+        if keep {
+            results.push(e);
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
     if !args.json {
-        crate::say!("{}", summary(&results))?;
+        crate::say!("{tally}")?;
     }
 
     match render {
