@@ -117,6 +117,26 @@ fn a_flood_of_idle_connections_is_refused_and_the_server_keeps_serving() {
 }
 
 #[test]
+fn running_out_of_file_descriptors_is_logged_and_survived() {
+    let dir = page();
+    // 12 descriptors: the server's own (about 9) and a few connections; accepting more fails with EMFILE.
+    let mut server = Server::start(&dir.path().join("dist"), Some(12));
+    let idle: Vec<TcpStream> = (0..20).map(|_| server.connect()).collect();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(server.is_running(), "the server stopped when it ran out of file descriptors");
+    drop(idle);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let mut resp = server.get("/");
+    while status(&resp) != "200" && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(100));
+        resp = server.get("/");
+    }
+    assert_eq!(status(&resp), "200", "{resp}");
+    let err = server.stop();
+    assert!(err.contains("still serving") || err.contains("refused"), "{err}");
+}
+
+#[test]
 fn a_client_that_never_reads_holds_up_nobody_else() {
     let dir = page();
     let server = Server::start(&dir.path().join("dist"), None);
