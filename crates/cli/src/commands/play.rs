@@ -92,11 +92,12 @@ mod game {
             window.show(&rgb)?;
         }
         let result = runner.result();
-        crate::say!("{}", serde_json::to_string(&result)?)?;
+        // The played episode is saved first, so a closed standard output cannot lose it.
         if let Some(path) = &args.save_actions {
             output::write_atomic(path, actionlog::to_json(config, "human", &result).as_bytes(), args.force)?;
             crate::note!("wrote {} ({} actions)", path.display(), result.steps);
         }
+        crate::say!("{}", serde_json::to_string(&result)?)?;
         Ok(ExitCode::SUCCESS)
     }
 }
