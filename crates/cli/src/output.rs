@@ -229,16 +229,17 @@ impl PendingDir {
 }
 
 /// Moves the old `dest` to `aside` (when there is one) and `new` to `dest`; puts the old one back if the
-/// second rename fails.
+/// second rename fails, and removes `new` when it cannot be put in place.
 fn swap(new: &Path, dest: &Path, aside: Option<&Path>) -> std::io::Result<()> {
-    if let Some(aside) = aside {
-        std::fs::rename(dest, aside)?;
-    }
-    let moved = std::fs::rename(new, dest);
+    let moved = match aside {
+        Some(aside) => std::fs::rename(dest, aside).and_then(|()| {
+            std::fs::rename(new, dest).inspect_err(|_| {
+                let _ = std::fs::rename(aside, dest);
+            })
+        }),
+        None => std::fs::rename(new, dest),
+    };
     if moved.is_err() {
-        if let Some(aside) = aside {
-            let _ = std::fs::rename(aside, dest);
-        }
         let _ = std::fs::remove_dir_all(new);
     }
     moved
@@ -364,6 +365,19 @@ mod tests {
         pending.commit().unwrap();
         assert_eq!(std::fs::read_to_string(dest.join("frame_00000.png")).unwrap(), "new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_failed_swap_keeps_the_old_folder_and_removes_the_new_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let (new, dest) = (dir.path().join(".frames.1.abcdef.part"), dir.path().join("frames"));
+        for (folder, text) in [(&new, "new"), (&dest, "old")] {
+            std::fs::create_dir(folder).unwrap();
+            std::fs::write(folder.join("frame_00000.png"), text).unwrap();
+        }
+        assert!(swap(&new, &dest, Some(&dir.path().join("missing/aside"))).is_err());
+        assert_eq!(std::fs::read_to_string(dest.join("frame_00000.png")).unwrap(), "old");
+        assert!(!new.exists());
     }
 
     #[test]
