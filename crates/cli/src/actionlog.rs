@@ -12,9 +12,13 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use std::io::Read;
+
 use anyhow::{Context, Result, bail};
 use chopperscape::Config;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
+
+mod fields;
 
 use crate::episode::EpisodeResult;
 use crate::options::rule_values;
@@ -26,29 +30,24 @@ pub const VERSION: u64 = 1;
 /// The environment id the rules belong to.
 pub const ENV_ID: &str = "ChopperScape-v0";
 
-/// Actions as written (a digit string) or as also accepted (an array of integers).
-#[derive(Serialize, Deserialize, Debug, Clone)]
-#[serde(untagged)]
-enum Actions {
-    Digits(String),
-    List(Vec<i64>),
-}
+/// The largest action log [`read`] reads, in bytes. A log takes one byte per action (as digits), so this holds
+/// an episode of over 60 million steps; a longer file is refused before it is parsed.
+pub const MAX_LOG_BYTES: u64 = 64 << 20;
 
-/// A saved episode.
-#[derive(Serialize, Deserialize, Debug, Clone)]
+/// The document as written, for [`to_json`].
+#[derive(Serialize)]
 struct Document {
-    format: String,
+    format: &'static str,
     version: u64,
-    env: String,
+    env: &'static str,
     seed: u64,
     options: BTreeMap<String, String>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     policy: Option<String>,
     steps: u32,
     #[serde(rename = "return")]
     ret: i64,
-    cause: Option<String>,
-    actions: Actions,
+    cause: Option<&'static str>,
+    actions: String,
 }
 
 /// A checked action log.
@@ -73,80 +72,63 @@ pub struct ActionLog {
 /// Writes `episode`, played under `config` by `policy`, as an action log (JSON text).
 pub fn to_json(config: &Config, policy: &str, episode: &EpisodeResult) -> String {
     let doc = Document {
-        format: FORMAT.into(),
+        format: FORMAT,
         version: VERSION,
-        env: ENV_ID.into(),
+        env: ENV_ID,
         seed: episode.seed,
         options: rule_values(config),
         policy: Some(policy.into()),
         steps: episode.steps,
         ret: episode.ret,
-        cause: episode.cause.map(String::from),
-        actions: Actions::Digits(episode.actions.iter().map(|a| char::from(b'0' + a)).collect()),
+        cause: episode.cause,
+        actions: episode.actions.iter().map(|a| char::from(b'0' + a)).collect(),
     };
     let mut text = serde_json::to_string_pretty(&doc).expect("an action log serializes");
     text.push('\n');
     text
 }
 
-/// Reads and checks an action log.
+/// Reads and checks an action log of at most [`MAX_LOG_BYTES`].
 ///
 /// # Errors
-/// An unreadable file, text that is not JSON, another format, version or env, an unknown option or a value out
-/// of range, an action outside 0..=4, or a `steps` field that disagrees with the actions.
+/// An unreadable or too large file, text that is not JSON, another format, version or env, an unknown option
+/// or a value out of range, an action outside 0..=4, or a `steps` field that disagrees with the actions.
 pub fn read(path: &Path) -> Result<ActionLog> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read action log {}", path.display()))?;
-    parse(&text).with_context(|| format!("{} is not a usable action log", path.display()))
+    let file = std::fs::File::open(path).with_context(|| format!("cannot read action log {}", path.display()))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_LOG_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .with_context(|| format!("cannot read action log {}", path.display()))?;
+    if bytes.len() as u64 > MAX_LOG_BYTES {
+        bail!(
+            "{} is larger than {} MiB, the most an action log may be; it is not a log this program wrote",
+            path.display(),
+            MAX_LOG_BYTES >> 20
+        );
+    }
+    parse_bytes(&bytes).with_context(|| format!("{} is not a usable action log", path.display()))
 }
 
 /// Parses and checks the text of an action log (see [`read`]).
+#[cfg(test)]
 pub fn parse(text: &str) -> Result<ActionLog> {
-    let value: serde_json::Value = serde_json::from_str(text).context("damaged: not a JSON document")?;
-    let field = |name: &str| value.get(name).cloned().unwrap_or(serde_json::Value::Null);
-    if field("format") != FORMAT {
-        bail!("the `format` field is {}, expected \"{FORMAT}\"", field("format"));
-    }
-    if field("version") != VERSION {
-        bail!("action log version {} is not supported: this build reads version {VERSION}", field("version"));
-    }
-    if field("env") != ENV_ID {
-        bail!("the log is for env {}, this build plays \"{ENV_ID}\"", field("env"));
-    }
-    let doc: Document = serde_json::from_value(value).context("damaged: a field is missing or has the wrong type")?;
-    let mut config = Config::default();
-    for (name, v) in &doc.options {
-        config.set(name, v).context("damaged: bad option")?;
-    }
-    let actions: Vec<u8> = match &doc.actions {
-        Actions::Digits(s) => s
-            .bytes()
-            .enumerate()
-            .map(|(i, b)| match b {
-                b'0'..=b'4' => Ok(b - b'0'),
-                _ => bail!("damaged: action {i} is {:?}; actions are the digits 0..=4", char::from(b)),
-            })
-            .collect::<Result<_>>()?,
-        Actions::List(v) => v
-            .iter()
-            .enumerate()
-            .map(|(i, &a)| match a {
-                0..=4 => Ok(a as u8),
-                _ => bail!("damaged: action {i} is {a}; actions are 0..=4"),
-            })
-            .collect::<Result<_>>()?,
-    };
-    if actions.len() != doc.steps as usize {
-        bail!("damaged: `steps` is {} but the log holds {} actions", doc.steps, actions.len());
-    }
-    Ok(ActionLog {
-        seed: doc.seed,
-        config,
-        policy: doc.policy,
-        steps: doc.steps,
-        ret: doc.ret,
-        cause: doc.cause,
-        actions,
-    })
+    parse_bytes(text.as_bytes())
+}
+
+/// Parses and checks an action log's bytes; a UTF-8 byte order mark before the document is skipped.
+///
+/// The document is read straight into its fields (no JSON tree is built), so the memory it takes is about one
+/// byte per action beside the text itself.
+fn parse_bytes(bytes: &[u8]) -> Result<ActionLog> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let raw: fields::Raw = serde_json::from_slice(bytes).map_err(|e| {
+        if e.is_syntax() || e.is_eof() {
+            anyhow::Error::new(e).context("damaged: not a JSON document")
+        } else {
+            anyhow::Error::new(e).context("damaged")
+        }
+    })?;
+    raw.check()
 }
 
 #[cfg(test)]

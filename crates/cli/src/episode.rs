@@ -99,11 +99,23 @@ pub fn cause_of(status: Status) -> Option<&'static str> {
     }
 }
 
+/// The most agent steps the command line plays in one episode when `max_episode_steps` is `none`: a pilot
+/// that never crashes (`noop` with `--bird-prob 0 --fuel-prob 1`) would otherwise play, and hold its actions,
+/// forever. A thousand times the default limit; the actions of such an episode take 10 MB.
+pub const STEP_CAP: u32 = 10_000_000;
+
+/// [`STEP_CAP`], or the `CHOPPERSCAPE_STEP_CAP` environment variable (for tests, which cannot wait for ten
+/// million steps).
+pub fn step_cap() -> u32 {
+    std::env::var("CHOPPERSCAPE_STEP_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(STEP_CAP)
+}
+
 /// Plays one whole episode with the built-in policy `name`, whose own generator (for `random`) is seeded with
 /// `seed` too. `frame` sees the env after reset and after every step.
 ///
 /// # Errors
-/// An unknown policy, or an error from `frame`.
+/// An unknown policy, an error from `frame`, or an episode without a step limit that is still running after
+/// [`step_cap`] steps.
 pub fn play_policy(
     config: &Config,
     name: &str,
@@ -114,7 +126,14 @@ pub fn play_policy(
     let mut runner = Runner::new(config)?;
     runner.reset(seed);
     frame(runner.env())?;
+    let cap = if config.max_episode_steps.is_none() { step_cap() } else { u32::MAX };
     while !runner.is_over() {
+        if runner.env().world().steps >= cap {
+            bail!(
+                "the episode did not end within {cap} steps; with --max-episode-steps none the command line stops \
+                 there (memory and time stay bounded); give --max-episode-steps N to truncate episodes at N steps"
+            );
+        }
         let action = pilot.act(runner.env().world());
         runner.step(action as u8)?;
         frame(runner.env())?;

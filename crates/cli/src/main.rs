@@ -6,13 +6,17 @@
 
 mod actionlog;
 mod commands;
+mod distinct;
 mod episode;
+mod interrupt;
 mod media;
 mod options;
 mod output;
 #[cfg(feature = "window")]
 mod overlay;
 mod progress;
+mod report;
+mod server;
 #[cfg(feature = "window")]
 mod window;
 
@@ -60,8 +64,23 @@ macro_rules! usage_bail {
     };
 }
 
+/// The exit code of a program stopped by a closed pipe (128 + SIGPIPE), as a shell shows it.
+const CLOSED_PIPE: u8 = 141;
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // Help and usage errors; a closed output is no reason to panic.
+            let _ = e.print();
+            return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
+        }
+    };
+    if !matches!(cli.command, Command::Web(_)) {
+        if let Err(e) = interrupt::install() {
+            note!("warning: Ctrl-C will not clean up unfinished files: {e}");
+        }
+    }
     let result = match cli.command {
         Command::Demo(a) => commands::demo::run(a),
         Command::Play(a) => commands::play::run(a),
@@ -73,7 +92,12 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            if let Some(out) = err.downcast_ref::<report::StdoutError>() {
+                if out.0.kind() == std::io::ErrorKind::BrokenPipe {
+                    return ExitCode::from(CLOSED_PIPE);
+                }
+            }
+            note!("error: {err:#}");
             if err.downcast_ref::<UsageError>().is_some() { ExitCode::from(2) } else { ExitCode::FAILURE }
         }
     }

@@ -22,31 +22,31 @@ fn option(name: &'static str) -> impl Fn(&str) -> Result<String, String> + Clone
 #[command(next_help_heading = "Game options (SPEC.md; the defaults are the v0 rules)")]
 pub struct GameOptions {
     /// Lives per episode, 1..=1000 [default: 1]
-    #[arg(long, value_name = "L", value_parser = option("lives"))]
+    #[arg(long, value_name = "L", allow_negative_numbers = true, value_parser = option("lives"))]
     pub lives: Option<String>,
     /// Probability per step that an alien bird appears, in [0, 1] [default: 0]
-    #[arg(long, value_name = "P", value_parser = option("alien_prob"))]
+    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("alien_prob"))]
     pub aliens: Option<String>,
     /// What a bird and a fuel tank that collide do: pass or destroy [default: pass]
     #[arg(long, value_name = "pass|destroy", value_parser = option("bird_fuel_collision"))]
     pub bird_fuel_collision: Option<String>,
     /// Steps each action is repeated for, 1..=1000 [default: 1]
-    #[arg(long, value_name = "K", value_parser = option("frame_skip"))]
+    #[arg(long, value_name = "K", allow_negative_numbers = true, value_parser = option("frame_skip"))]
     pub frame_skip: Option<String>,
     /// Probability that the previous action is applied instead of the new one, in [0, 1] [default: 0]
-    #[arg(long, value_name = "P", value_parser = option("sticky_prob"))]
+    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("sticky_prob"))]
     pub sticky: Option<String>,
     /// Probability per step that a bird appears, in [0, 1] [default: 0.01]
-    #[arg(long, value_name = "P", value_parser = option("bird_prob"))]
+    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("bird_prob"))]
     pub bird_prob: Option<String>,
     /// Probability per step that a fuel tank appears, in [0, 1] [default: 0.01]
-    #[arg(long, value_name = "P", value_parser = option("fuel_prob"))]
+    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("fuel_prob"))]
     pub fuel_prob: Option<String>,
     /// Fuel at reset and after a refill, 1..=1000000 [default: 1000]
-    #[arg(long, value_name = "N", value_parser = option("max_fuel"))]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = option("max_fuel"))]
     pub max_fuel: Option<String>,
     /// Agent steps after which an episode is truncated, or `none` [default: 10000]
-    #[arg(long, value_name = "N|none", value_parser = option("max_episode_steps"))]
+    #[arg(long, value_name = "N|none", allow_negative_numbers = true, value_parser = option("max_episode_steps"))]
     pub max_episode_steps: Option<String>,
 }
 

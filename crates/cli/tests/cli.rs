@@ -239,7 +239,7 @@ fn bad_flags_exit_2_with_a_message_naming_the_value_and_what_is_allowed() {
         (&["demo", "--render", "tv"], &["tv", "human"]),
         (&["record", "--policy", "random"], &["nothing to record", "--out"]),
         (&["record", "--out", "x.avi"], &[".gif", ".mp4"]),
-        (&["bench", "--seconds", "0"], &["seconds", "(0, 600]"]),
+        (&["bench", "--seconds", "0"], &["seconds", "[0.01, 600]"]),
         (&["play", "--sticky", "2"], &["sticky_prob"]),
         (&["fly"], &["fly"]),
     ];

@@ -36,10 +36,10 @@ pub struct BenchArgs {
     #[arg(long)]
     pub json: bool,
     /// Seconds of each timed run
-    #[arg(long, default_value_t = 0.3, value_parser = positive_seconds)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true, value_parser = measurable_seconds)]
     pub seconds: f64,
     /// Timed runs per scenario (the median is reported), at least 1
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 5, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
     /// Only these scenarios (repeatable) [default: all]
     #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(SCENARIOS))]
@@ -48,10 +48,18 @@ pub struct BenchArgs {
     pub options: GameOptions,
 }
 
-fn positive_seconds(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= 600.0 => Ok(v),
-        _ => Err(format!("{s} is not a number of seconds in (0, 600]")),
+/// The shortest timed run, in seconds: shorter ones would time the clock, not the env.
+pub const MIN_SECONDS: f64 = 0.01;
+/// The longest timed run, in seconds.
+pub const MAX_SECONDS: f64 = 600.0;
+
+fn measurable_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (MIN_SECONDS..=MAX_SECONDS).contains(&v) => Ok(v),
+        Ok(v) if v > 0.0 && v < MIN_SECONDS => {
+            Err(format!("{s} s is too short to measure; give a number of seconds in [{MIN_SECONDS}, {MAX_SECONDS}]"))
+        }
+        _ => Err(format!("{s} is not a number of seconds in [{MIN_SECONDS}, {MAX_SECONDS}]")),
     }
 }
 
@@ -99,13 +107,13 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
         struct Report<'a> {
             scenarios: &'a [Measured],
         }
-        println!("{}", serde_json::to_string(&Report { scenarios: &measured })?);
+        crate::say!("{}", serde_json::to_string(&Report { scenarios: &measured })?)?;
     } else {
-        println!("{:<24} {:>7} {:>16}", "scenario", "threads", "steps/s");
+        crate::say!("{:<24} {:>7} {:>16}", "scenario", "threads", "steps/s")?;
         for m in &measured {
-            println!("{:<24} {:>7} {:>16.0}", m.name, m.threads, m.steps_per_sec);
+            crate::say!("{:<24} {:>7} {:>16.0}", m.name, m.threads, m.steps_per_sec)?;
         }
-        println!("median of {} runs of {} s each{}", args.runs, args.seconds, build_note());
+        crate::say!("median of {} runs of {} s each{}", args.runs, args.seconds, build_note())?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -8,7 +8,7 @@ use chopperscape::Config;
 use clap::{Args, ValueEnum};
 use serde_json::json;
 
-use super::{policy_parser, summary, table_header, table_row};
+use super::{Tally, policy_parser, table_header, table_row};
 use crate::episode::{EpisodeResult, play_policy, replay_actions};
 use crate::media::{Recorder, open_video};
 use crate::options::GameOptions;
@@ -46,10 +46,10 @@ pub struct DemoArgs {
     #[arg(long, default_value = "random", value_parser = policy_parser())]
     pub policy: String,
     /// Number of episodes, at least 1
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
     pub episodes: u32,
     /// Seed of the first episode
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = super::seed_parser)]
     pub seed: u64,
     /// Print one JSON object per episode (and nothing else on standard output); implies --render none
     /// unless --out or --render is given
@@ -90,33 +90,42 @@ pub fn run(args: DemoArgs) -> Result<ExitCode> {
     let config = args.options.apply(Config::default())?;
 
     let bar = progress::bar(u64::from(args.episodes), "playing", args.json);
+    // Only a recording or a window replays the episodes; otherwise nothing of them is kept but the tally.
+    let keep = render != Render::None;
     let mut results = Vec::new();
+    let mut tally = Tally::default();
+    if !args.json {
+        bar.suspend(|| crate::say!("{}", table_header()))?;
+    }
     for i in 0..u64::from(args.episodes) {
-        results.push(play_policy(&config, &args.policy, args.seed.wrapping_add(i), |_| Ok(()))?);
+        let e = play_policy(&config, &args.policy, args.seed.wrapping_add(i), |_| Ok(()))?;
+        tally.add(&e);
+        let line = if args.json {
+            json!({"episode": i, "seed": e.seed, "steps": e.steps, "return": e.ret, "cause": e.cause}).to_string()
+        } else {
+            table_row(i as usize, &e)
+        };
+        bar.suspend(|| crate::say!("{line}"))?;
+        if keep {
+            results.push(e);
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
-
-    if args.json {
-        for (i, e) in results.iter().enumerate() {
-            let line = json!({"episode": i, "seed": e.seed, "steps": e.steps, "return": e.ret, "cause": e.cause});
-            println!("{line}");
-        }
-    } else {
-        println!("{}", table_header());
-        for (i, e) in results.iter().enumerate() {
-            println!("{}", table_row(i, e));
-        }
-        println!("{}", summary(&results));
+    if !args.json {
+        crate::say!("{tally}")?;
     }
 
     match render {
         Render::None => {}
         Render::Gif => {
-            let frames: u32 = results.iter().map(|e| e.steps + 1).sum();
+            let frames: u64 = results.iter().map(|e| u64::from(e.steps) + 1).sum();
+            let Ok(frames) = u32::try_from(frames) else {
+                anyhow::bail!("{frames} frames are more than one recording can hold ({})", u32::MAX)
+            };
             record(&config, &results, &out, frames, force, args.json)?;
             let msg = format!("wrote {} ({frames} frames at 30 fps)", out.display());
-            if args.json { eprintln!("{msg}") } else { println!("{msg}") }
+            if args.json { crate::note!("{msg}") } else { crate::say!("{msg}")? }
         }
         Render::Human => show(&config, &results)?,
     }

@@ -20,7 +20,7 @@ use crate::options::GameOptions;
 chopperscape play --seed 3 --save-actions my-run.json && chopperscape replay my-run.json")]
 pub struct PlayArgs {
     /// Seed of the first episode (R restarts with the next one)
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = super::seed_parser)]
     pub seed: u64,
     /// Write the last episode played as an action log (JSON) to this file
     #[arg(long, value_name = "FILE")]
@@ -92,11 +92,12 @@ mod game {
             window.show(&rgb)?;
         }
         let result = runner.result();
-        println!("{}", serde_json::to_string(&result)?);
+        // The played episode is saved first, so a closed standard output cannot lose it.
         if let Some(path) = &args.save_actions {
             output::write_atomic(path, actionlog::to_json(config, "human", &result).as_bytes(), args.force)?;
-            eprintln!("wrote {} ({} actions)", path.display(), result.steps);
+            crate::note!("wrote {} ({} actions)", path.display(), result.steps);
         }
+        crate::say!("{}", serde_json::to_string(&result)?)?;
         Ok(ExitCode::SUCCESS)
     }
 }

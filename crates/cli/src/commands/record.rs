@@ -1,6 +1,6 @@
 //! `chopperscape record`: one episode of a built-in pilot to a video, a folder of frames, or an action log.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -10,8 +10,8 @@ use clap::Args;
 use super::{policy_parser, table_header, table_row};
 use crate::episode::play_policy;
 use crate::options::GameOptions;
-use crate::output::check_free;
-use crate::{actionlog, output, usage_bail};
+use crate::output::{PendingDir, check_free};
+use crate::{actionlog, output, progress, usage_bail};
 
 /// Record one episode of a built-in pilot.
 ///
@@ -27,7 +27,7 @@ pub struct RecordArgs {
     #[arg(long, default_value = "random", value_parser = policy_parser())]
     pub policy: String,
     /// Seed of the episode (and of the random pilot's own generator)
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = super::seed_parser)]
     pub seed: u64,
     #[command(flatten)]
     pub outputs: RecordOutputs,
@@ -53,11 +53,25 @@ pub struct RecordOutputs {
 }
 
 impl RecordOutputs {
-    /// Checks every destination before anything is played, so a refusal costs nothing.
-    pub fn check(&self) -> Result<()> {
+    /// Checks every destination before anything is played, so a refusal costs nothing: each is free (or
+    /// `--force` is given), its folder exists, and no two of them (nor `input`, the file read) are one file.
+    ///
+    /// # Errors
+    /// A [`crate::UsageError`] for two outputs on one file or a bad extension; another error for an output
+    /// that exists or cannot be written.
+    pub fn check(&self, input: Option<(&str, &Path)>) -> Result<()> {
+        let mut paths: Vec<(&str, &Path, bool)> = Vec::new();
+        paths.extend(input.map(|(what, p)| (what, p, false)));
+        paths.extend(self.out.as_deref().map(|p| ("--out", p, false)));
+        paths.extend(self.frames.as_deref().map(|p| ("--frames", p, true)));
+        paths.extend(self.save_actions.as_deref().map(|p| ("--save-actions", p, false)));
+        crate::distinct::check(&paths)?;
         if let Some(out) = &self.out {
             crate::media::Format::from_path(out)?;
             check_free(out, self.force)?;
+        }
+        if let Some(dir) = &self.frames {
+            PendingDir::check(dir, self.force)?;
         }
         if let Some(path) = &self.save_actions {
             check_free(path, self.force)?;
@@ -77,17 +91,26 @@ pub fn run(args: RecordArgs) -> Result<ExitCode> {
     if !o.any() {
         usage_bail!("nothing to record: give --out FILE, --frames DIR or --save-actions FILE");
     }
-    o.check()?;
+    o.check(None)?;
     let config = args.options.apply(Config::default())?;
-    let episode = play_policy(&config, &args.policy, args.seed, |_| Ok(()))?;
+    let counter = progress::counter("playing", false);
+    let episode = play_policy(&config, &args.policy, args.seed, |env| {
+        let steps = env.world().steps;
+        if steps % 1024 == 0 {
+            counter.set_position(u64::from(steps));
+        }
+        Ok(())
+    });
+    counter.finish_and_clear();
+    let episode = episode?;
     super::replay::render(&config, &episode, o)?;
     if let Some(path) = &o.save_actions {
         output::write_atomic(path, actionlog::to_json(&config, &args.policy, &episode).as_bytes(), o.force)?;
     }
-    println!("{}\n{}", table_header(), table_row(0, &episode));
+    crate::say!("{}\n{}", table_header(), table_row(0, &episode))?;
     for (what, path) in [("video", &o.out), ("frames", &o.frames), ("actions", &o.save_actions)] {
         if let Some(p) = path {
-            println!("wrote {what}: {}", p.display());
+            crate::say!("wrote {what}: {}", p.display())?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -33,7 +33,7 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
     if args.outputs.save_actions.is_some() {
         usage_bail!("replay reads an action log; --save-actions does not apply (copy the file instead)");
     }
-    args.outputs.check()?;
+    args.outputs.check(Some(("the action log", &args.file)))?;
     let log = actionlog::read(&args.file)?;
     let bar = progress::bar(u64::from(log.steps) + 1, "replaying", args.json);
     let mut recorder = recorder(&args.outputs, log.steps + 1)?;
@@ -58,21 +58,21 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
     }
     recorder.finish()?;
     if args.json {
-        println!("{}", serde_json::to_string(&got)?);
+        crate::say!("{}", serde_json::to_string(&got)?)?;
     } else {
-        println!(
+        crate::say!(
             "{} ({} playing) reproduces: {} steps, return {}, end {}",
             args.file.display(),
             log.policy.as_deref().unwrap_or("unknown pilot"),
             got.steps,
             got.ret,
             got.cause.unwrap_or("running (stopped before the end)")
-        );
+        )?;
     }
     for (what, path) in [("video", &args.outputs.out), ("frames", &args.outputs.frames)] {
         if let Some(p) = path {
             let msg = format!("wrote {what}: {}", p.display());
-            if args.json { eprintln!("{msg}") } else { println!("{msg}") }
+            if args.json { crate::note!("{msg}") } else { crate::say!("{msg}")? }
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -48,4 +48,8 @@ impl FrameSink for ApngSink {
         self.writer.finish()?;
         self.pending.commit()
     }
+
+    fn dest(&self) -> &Path {
+        self.pending.dest()
+    }
 }

@@ -33,4 +33,8 @@ impl FrameSink for FramesSink {
     fn finish(self: Box<Self>) -> Result<()> {
         self.dir.commit()
     }
+
+    fn dest(&self) -> &Path {
+        self.dir.dest()
+    }
 }

@@ -121,6 +121,10 @@ impl FrameSink for GifSink {
         drop(encoder.into_inner()?);
         pending.commit()
     }
+
+    fn dest(&self) -> &Path {
+        self.pending.dest()
+    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ mod mp4;
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use chopperscape::ChopperScape;
 use chopperscape::consts::{HEIGHT, WIDTH};
 
@@ -64,6 +64,8 @@ pub trait FrameSink {
     fn push(&mut self, rgb: &[u8]) -> Result<()>;
     /// Completes the output and renames it into place.
     fn finish(self: Box<Self>) -> Result<()>;
+    /// The file or folder it writes (named in errors).
+    fn dest(&self) -> &Path;
 }
 
 /// Opens a video file sink for `frames` frames.
@@ -107,7 +109,7 @@ impl Recorder {
         }
         env.render_into(&mut self.rgb)?;
         for sink in &mut self.sinks {
-            sink.push(&self.rgb)?;
+            sink.push(&self.rgb).with_context(|| format!("cannot write {}", sink.dest().display()))?;
         }
         Ok(())
     }
@@ -115,7 +117,8 @@ impl Recorder {
     /// Finishes every sink.
     pub fn finish(self) -> Result<()> {
         for sink in self.sinks {
-            sink.finish()?;
+            let dest = sink.dest().to_path_buf();
+            sink.finish().with_context(|| format!("cannot write {}", dest.display()))?;
         }
         Ok(())
     }

@@ -1,18 +1,27 @@
 //! MP4 through the `ffmpeg` program, fed raw rgb24 frames on its standard input.
+//!
+//! ffmpeg's standard error is read all along by a thread (so it can never fill its pipe and stall ffmpeg) and
+//! its last lines go into any error, so "ffmpeg stopped reading frames" says why.
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdin, Command, Stdio};
+use std::thread::JoinHandle;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 
 use super::{FPS, FrameSink, H, W};
+use crate::interrupt::{self, Cleanup, Registered};
 use crate::output::PendingFile;
+
+/// The most of ffmpeg's standard error kept for a message, in bytes (its end is kept).
+const STDERR_KEPT: usize = 4096;
 
 /// Pipes frames into `ffmpeg`, which writes an H.264 (or its default MP4 codec) file.
 pub struct Mp4Sink {
-    child: Option<Child>,
+    child: Option<(Child, Registered)>,
     stdin: Option<ChildStdin>,
+    stderr: Option<JoinHandle<String>>,
     pending: Option<PendingFile>,
 }
 
@@ -41,25 +50,56 @@ impl Mp4Sink {
             ),
             Err(e) => return Err(e).context("cannot start ffmpeg"),
         };
+        let registered = interrupt::register(Cleanup::Kill(child.id()));
         let stdin = child.stdin.take();
-        Ok(Mp4Sink { child: Some(child), stdin, pending: Some(pending) })
+        let stderr = child.stderr.take().map(|mut pipe| {
+            std::thread::spawn(move || {
+                let mut kept = Vec::new();
+                let mut chunk = [0u8; 1024];
+                while let Ok(n @ 1..) = pipe.read(&mut chunk) {
+                    kept.extend_from_slice(&chunk[..n]);
+                    if kept.len() > STDERR_KEPT {
+                        kept.drain(..kept.len() - STDERR_KEPT);
+                    }
+                }
+                String::from_utf8_lossy(&kept).trim().to_string()
+            })
+        });
+        Ok(Mp4Sink { child: Some((child, registered)), stdin, stderr, pending: Some(pending) })
+    }
+
+    /// Closes ffmpeg's input, waits for it, and returns how it ended and what it said.
+    fn wait(&mut self) -> Result<(std::process::ExitStatus, String)> {
+        drop(self.stdin.take());
+        let (mut child, registered) = self.child.take().ok_or_else(|| anyhow!("ffmpeg was already waited for"))?;
+        let status = child.wait().context("ffmpeg did not finish")?;
+        drop(registered);
+        let said = self.stderr.take().and_then(|t| t.join().ok()).unwrap_or_default();
+        Ok((status, said))
     }
 }
 
 impl FrameSink for Mp4Sink {
     fn push(&mut self, rgb: &[u8]) -> Result<()> {
-        let stdin = self.stdin.as_mut().expect("stdin is open until finish");
-        stdin.write_all(rgb).context("ffmpeg stopped reading frames")
+        let Some(stdin) = self.stdin.as_mut() else { bail!("ffmpeg's input is already closed") };
+        let Err(e) = stdin.write_all(rgb) else { return Ok(()) };
+        let (status, said) = self.wait()?;
+        if said.is_empty() {
+            bail!("ffmpeg stopped reading frames ({e}); it exited with {status} and said nothing");
+        }
+        bail!("ffmpeg stopped reading frames ({e}); it exited with {status} and said: {said}")
     }
 
     fn finish(mut self: Box<Self>) -> Result<()> {
-        drop(self.stdin.take());
-        let child = self.child.take().expect("the child runs until finish");
-        let out = child.wait_with_output().context("ffmpeg did not finish")?;
-        if !out.status.success() {
-            bail!("ffmpeg failed ({}): {}", out.status, String::from_utf8_lossy(&out.stderr).trim());
+        let (status, said) = self.wait()?;
+        if !status.success() {
+            bail!("ffmpeg failed ({status}): {said}");
         }
-        self.pending.take().expect("the file is pending until finish").commit()
+        self.pending.take().ok_or_else(|| anyhow!("the file was already written"))?.commit()
+    }
+
+    fn dest(&self) -> &Path {
+        self.pending.as_ref().map_or(Path::new("the .mp4 file"), |p| p.dest())
     }
 }
 
@@ -67,7 +107,7 @@ impl Drop for Mp4Sink {
     /// An abandoned recording stops `ffmpeg`; the temporary file goes with the `PendingFile`.
     fn drop(&mut self) {
         drop(self.stdin.take());
-        if let Some(mut child) = self.child.take() {
+        if let Some((mut child, _registered)) = self.child.take() {
             let _ = child.kill();
             let _ = child.wait();
         }
