@@ -40,7 +40,7 @@ pub trait Policy {
 ///
 /// # Errors
 /// An unknown name; the message lists the known ones.
-pub fn by_name(name: &str, seed: u64, config: &Config) -> Result<Box<dyn Policy + Send>, String> {
+pub fn by_name(name: &str, seed: u64, config: &Config) -> Result<Box<dyn Policy + Send + Sync>, String> {
     Ok(match name {
         "random" => Box::new(RandomPolicy::new(seed)),
         "heuristic" => Box::new(Heuristic::for_config(config)),
