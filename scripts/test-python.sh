@@ -21,6 +21,11 @@ PY=.venv/bin/python
 quiet "$PY" -m pip install --disable-pip-version-check -q "maturin>=1.9.4,<2" "gymnasium>=1.1" numpy "pytest>=7"
 "$PY" -c "import pygame" >/dev/null 2>&1 || quiet "$PY" -m pip install --disable-pip-version-check -q pygame \
   || say "skipped: pygame (render_mode=\"human\" is tested as unavailable instead)"
+"$PY" -c "import minari, h5py, PIL" >/dev/null 2>&1 \
+  || quiet "$PY" -m pip install --disable-pip-version-check -q "minari[hdf5]" pillow \
+  || say "skipped: minari (the Minari dataset tests are skipped)"
+"$PY" -c "import torch" >/dev/null 2>&1 \
+  || say "skipped: the behaviour-cloning smoke test (torch is not installed here; pip install torch to run it)"
 
 # Rebuild the extension only when something it is built from changed.
 stamp=.venv/.chopperscape-build
