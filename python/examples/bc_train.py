@@ -1,7 +1,7 @@
 """Behaviour cloning baseline: a small MLP imitates the heuristic pilot from a Minari features dataset, then flies
 held-out seeds.
 
-    python python/examples/bc_train.py                      # 40 heuristic episodes, 10 epochs, 50 eval episodes
+    python python/examples/bc_train.py          # 100 heuristic episodes, 30 epochs, 256 wide, 50 eval episodes
     python python/examples/bc_train.py --dataset chopperscape/heuristic-features-v0   # an existing dataset
 
 Needs `pip install torch "minari[hdf5]" pillow` (torch on the CPU is enough). Without `--dataset` the episodes are
@@ -32,7 +32,7 @@ def load(dataset_id: str):
     return ds, np.concatenate(obs).astype(np.float32), np.concatenate(acts).astype(np.int64)
 
 
-def train(x: np.ndarray, y: np.ndarray, epochs: int, seed: int, hidden: int = 128):
+def train(x: np.ndarray, y: np.ndarray, epochs: int, seed: int, hidden: int = 256):
     import torch
     from torch import nn
 
@@ -76,12 +76,12 @@ def evaluate(act, episodes: int, seed: int, max_episode_steps: int, options: dic
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--dataset", help="an existing Minari dataset id of features observations (default: collect one)")
-    p.add_argument("--episodes", type=int, default=40, help="heuristic episodes to collect (without --dataset)")
-    p.add_argument("--epochs", type=int, default=10)
+    p.add_argument("--episodes", type=int, default=100, help="heuristic episodes to collect (without --dataset)")
+    p.add_argument("--epochs", type=int, default=30)
     p.add_argument("--eval-episodes", type=int, default=50)
     p.add_argument("--eval-seed", type=int, default=1_000_000)
     p.add_argument("--max-episode-steps", type=int, default=10_000)
-    p.add_argument("--hidden", type=int, default=128, help="width of the MLP's two hidden layers")
+    p.add_argument("--hidden", type=int, default=256, help="width of the MLP's two hidden layers")
     p.add_argument("--seed", type=int, default=0, help="seed of torch's initialisation and shuffling")
     args = p.parse_args()
 

@@ -1,5 +1,6 @@
-"""The behaviour-cloning example runs end to end (a few short episodes, one epoch), and the registered id form
-`"chopperscape:ChopperScape-v0"` works in a fresh interpreter without importing the package first."""
+"""The behaviour-cloning example runs end to end (a few short episodes, one epoch); the registered id form
+`"chopperscape:ChopperScape-v0"` works in a fresh interpreter without importing the package first; the vector env
+uses one thread unless asked."""
 
 from __future__ import annotations
 
@@ -48,3 +49,11 @@ def test_the_module_qualified_id_needs_no_prior_import():
     done = subprocess.run([sys.executable, "-c", FRESH], capture_output=True, text=True, cwd=ROOT / "python" / "tests")
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["ok", "ChopperScape-v0", "10000"]
+
+
+def test_the_vector_env_uses_one_thread_unless_asked():
+    import chopperscape
+
+    # Measured (python/README.md, "Threads"): on 2-vCPU hosts a second thread loses whenever the CPU is shared.
+    assert chopperscape.VectorEnv(1024, obs_type="features").num_threads == 1
+    assert chopperscape.VectorEnv(1024, num_threads=2, obs_type="features").num_threads == 2
