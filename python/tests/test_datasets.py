@@ -181,3 +181,25 @@ def test_the_cli_dataset_command_runs_the_python_package(datasets_path, tmp_path
     assert missing.returncode == 1
     assert "cannot import chopperscape.datasets" in missing.stderr and "pip install" in missing.stderr
     assert not (datasets_path / "cs" / "never-v0").exists()
+
+
+def test_collection_streams_to_disk_with_bounded_memory():
+    import tracemalloc
+
+    def peak(dataset_id: str, chunk_steps: int) -> int:
+        tracemalloc.start()
+        try:
+            datasets.collect(dataset_id, "noop", 1, 0, obs_type="grayscale", obs_size=(84, 84), bird_prob=0,
+                             max_episode_steps=1000, chunk_steps=chunk_steps)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    # 1000 observations of 84 × 84 bytes are 7 MB: held in chunks of 50, a small fraction of that is ever alive.
+    peak("cs/warm-up-v0", 50)  # the first collection imports modules, which tracemalloc counts too
+    streamed, whole = peak("cs/chunked-v0", 50), peak("cs/whole-v0", 10_000)
+    assert streamed < 2_500_000 < 7_000_000 < whole, (streamed, whole)
+    a, b = minari.load_dataset("cs/chunked-v0"), minari.load_dataset("cs/whole-v0")
+    ea, eb = next(a.iterate_episodes()), next(b.iterate_episodes())
+    assert ea.observations.shape == (1001, 84, 84)
+    np.testing.assert_array_equal(ea.observations, eb.observations)
