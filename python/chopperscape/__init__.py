@@ -14,8 +14,9 @@ from gymnasium.envs.registration import register, registry
 from . import _core
 from .env import ChopperScapeEnv
 from .vector import VectorEnv
+from . import pilots
 
-__all__ = ["ChopperScapeEnv", "VectorEnv", "ACTION_MEANINGS", "OPTION_NAMES", "__version__"]
+__all__ = ["ChopperScapeEnv", "VectorEnv", "pilots", "ACTION_MEANINGS", "OPTION_NAMES", "__version__"]
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]

@@ -18,12 +18,13 @@ _CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
 
 
 def default_threads(num_envs: int) -> int:
-    """The CPUs this process may use, at most one thread per 64 environments (a thread costs ~20 µs a batch)."""
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except AttributeError:
-        cpus = os.cpu_count() or 1
-    return max(1, min(cpus, num_envs // 64))
+    """One thread, unless asked for more with `num_threads`.
+
+    Measured on the 2-vCPU machines this is developed on (python/README.md, "Threads"): a second thread wins only
+    for large batches on an idle host, and loses badly (up to 4× slower) when anything else wants the CPU, which is
+    the usual case while a learner trains beside the env. `os.sched_getaffinity` says how many CPUs this process
+    may use; pass `num_threads` up to that for N ≥ 1024 after measuring with `python/bench.py`."""
+    return 1
 
 
 class VectorEnv(gym.vector.VectorEnv):
@@ -34,7 +35,7 @@ class VectorEnv(gym.vector.VectorEnv):
 
     | Argument | Default | Meaning |
     |----------|---------|---------|
-    | `num_threads` | CPUs, at most one per 64 envs | worker threads (results do not depend on it) |
+    | `num_threads` | 1 | worker threads (results do not depend on it); more pay only for large batches on idle cores (see `default_threads`) |
     | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, overwritten by the next `step`/`reset` (copy what you keep, and do not write into them: pixel observations are drawn incrementally onto the previous frame) |
     | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
     | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |

@@ -122,7 +122,7 @@ pub fn play_policy(
     seed: u64,
     mut frame: impl FnMut(&ChopperScape) -> Result<()>,
 ) -> Result<EpisodeResult> {
-    let mut pilot = policy::by_name(name, seed).map_err(anyhow::Error::msg)?;
+    let mut pilot = policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?;
     let mut runner = Runner::new(config)?;
     runner.reset(seed);
     frame(runner.env())?;

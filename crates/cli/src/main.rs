@@ -42,6 +42,7 @@ enum Command {
     Replay(commands::replay::ReplayArgs),
     Bench(commands::bench::BenchArgs),
     Web(commands::web::WebArgs),
+    Dataset(commands::dataset::DatasetArgs),
 }
 
 /// An error in how the command was called (exit code 2), as opposed to a failure while running it (exit code 1).
@@ -88,6 +89,7 @@ fn main() -> ExitCode {
         Command::Replay(a) => commands::replay::run(a),
         Command::Bench(a) => commands::bench::run(a),
         Command::Web(a) => commands::web::run(a),
+        Command::Dataset(a) => commands::dataset::run(a),
     };
     match result {
         Ok(code) => code,

@@ -10,8 +10,8 @@ use std::fmt::Write;
 /// Plays the golden episodes and prints one line per step.
 fn trajectory(name: &str, config: Config, seed: u64, policy_name: &str) -> String {
     let mut out = String::new();
+    let mut pilot = policy::by_name(policy_name, seed, &config).unwrap();
     let mut env = ChopperScape::new(config).unwrap();
-    let mut pilot = policy::by_name(policy_name, seed).unwrap();
     let (obs, info) = env.reset(Some(seed));
     let bytes: Vec<u8> = obs.as_f32().unwrap().iter().flat_map(|v| v.to_le_bytes()).collect();
     writeln!(out, "# {name}: seed {seed}, policy {policy_name}").unwrap();

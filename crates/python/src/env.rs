@@ -150,3 +150,10 @@ impl PyEnv {
         Ok((ctor, (self.snapshot(py),)))
     }
 }
+
+impl PyEnv {
+    /// The core env (for the pilots, which read its world).
+    pub(crate) fn core(&self) -> &ChopperScape {
+        &self.env
+    }
+}

@@ -13,6 +13,7 @@ mod env;
 mod errors;
 mod obs;
 mod options;
+mod pilots;
 mod vector;
 
 use pyo3::prelude::*;
@@ -25,6 +26,8 @@ mod _core {
     #[pymodule_export]
     use super::env::PyEnv;
     #[pymodule_export]
+    use super::pilots::{PyPilot, PyVectorPilot};
+    #[pymodule_export]
     use super::vector::PyVectorEnv;
 
     #[pymodule_init]
@@ -34,6 +37,7 @@ mod _core {
         m.add("CAUSE_NAMES", chopperscape_vector::CAUSE_NAMES.to_vec())?;
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
+        m.add("PILOT_NAMES", chopperscape::policy::NAMES.to_vec())?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         Ok(())
     }

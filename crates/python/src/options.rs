@@ -42,6 +42,10 @@ fn option_text(name: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
         if let Ok((h, w)) = value.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>() {
             return Ok(format!("{}x{}", h.str()?, w.str()?));
         }
+        // A list, as a JSON round trip (a Minari dataset's env spec) gives back.
+        if let Ok([h, w]) = value.extract::<Vec<Bound<'_, PyAny>>>().as_deref() {
+            return Ok(format!("{}x{}", h.str()?, w.str()?));
+        }
     }
     Ok(value.str()?.to_string())
 }

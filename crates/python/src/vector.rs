@@ -318,3 +318,10 @@ impl PyVectorEnv {
         Ok(self.inner.env(i))
     }
 }
+
+impl PyVectorEnv {
+    /// The core batch (for the pilots, which read each env's world).
+    pub(crate) fn core(&self) -> &VectorEnv {
+        &self.inner
+    }
+}

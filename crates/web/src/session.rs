@@ -40,12 +40,13 @@ impl Session {
             config.set(name, value).map_err(|e| e.to_string())?;
         }
         let env = ChopperScape::new(config).map_err(|e| e.to_string())?;
+        let pilot = heuristic(env.config());
         let mut rgba = vec![0; FRAME_HEIGHT * FRAME_WIDTH * 4];
         // Alpha never changes: the frame is opaque.
         rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
         Ok(Session {
             env,
-            pilot: heuristic(),
+            pilot,
             features: vec![0.0; features::FEATURES_LEN],
             rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3],
             rgba,
@@ -55,7 +56,7 @@ impl Session {
     /// Starts an episode from `seed` and draws its first frame.
     pub fn reset(&mut self, seed: u64) {
         self.env.reset_into(Some(seed), ObsBufMut::F32(&mut self.features)).expect("the features buffer fits");
-        self.pilot = heuristic();
+        self.pilot = heuristic(self.env.config());
         self.draw();
     }
 
@@ -102,8 +103,8 @@ impl Session {
     }
 }
 
-fn heuristic() -> Box<dyn Policy + Send> {
-    policy::by_name("heuristic", 0).expect("the heuristic pilot is built in")
+fn heuristic(config: &Config) -> Box<dyn Policy + Send> {
+    policy::by_name("heuristic", 0, config).expect("the heuristic pilot is built in")
 }
 
 #[cfg(test)]

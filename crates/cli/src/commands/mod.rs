@@ -1,6 +1,7 @@
 //! One file per command.
 
 pub mod bench;
+pub mod dataset;
 pub mod demo;
 pub mod play;
 pub mod record;

@@ -1,0 +1,130 @@
+//! `chopperscape dataset`: episodes of a built-in pilot (or replayed action logs) as a Minari dataset.
+//!
+//! Minari's on-disk format (HDF5 plus JSON metadata) is written by Minari's own Python classes, so this command
+//! runs the Python package: `python -m chopperscape.datasets` with the same arguments. It needs the `chopperscape`
+//! Python package and `minari[hdf5]` in the interpreter named by `CHOPPERSCAPE_PYTHON` (default `python3`), and
+//! says so when they are missing.
+
+use std::path::PathBuf;
+use std::process::{Command, ExitCode, Stdio};
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use super::policy_parser;
+use crate::options::GameOptions;
+use crate::usage_bail;
+
+/// The environment variable naming the Python interpreter to run.
+pub const PYTHON_VAR: &str = "CHOPPERSCAPE_PYTHON";
+
+/// Write a Minari dataset of ChopperScape-v0 episodes (needs the chopperscape Python package and minari).
+///
+/// Episode i is played from seed S+i with the pilot seeded S+i, exactly as `demo` plays it. The dataset goes
+/// under MINARI_DATASETS_PATH (default ~/.minari/datasets), where `minari.load_dataset(NAME)` finds it; an
+/// existing dataset is never overwritten. The work is done by `python -m chopperscape.datasets` in the
+/// interpreter named by CHOPPERSCAPE_PYTHON (default python3), which needs `pip install chopperscape
+/// "minari[hdf5]" pillow`.
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:\n  \
+chopperscape dataset --policy heuristic --episodes 100 --obs-type features --out chopperscape/heuristic-v0\n  \
+chopperscape dataset --from-logs run1.json run2.json --obs-type grayscale --obs-size 84x84 --out me/human-v0")]
+pub struct DatasetArgs {
+    /// The dataset id, `namespace/name-vN` (or `name-vN`)
+    #[arg(long, value_name = "NAME")]
+    pub out: String,
+    /// The pilot: random, heuristic, or a fixed action (right, left, down, up, noop)
+    #[arg(long, default_value = "heuristic", value_parser = policy_parser())]
+    pub policy: String,
+    /// Number of episodes, at least 1
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub episodes: u32,
+    /// Seed of the first episode
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Observation: rgb, rgb_float, grayscale or features
+    #[arg(long, default_value = "features", value_parser = ["rgb", "rgb_float", "grayscale", "features"])]
+    pub obs_type: String,
+    /// Pixel observation size HxW, e.g. 84x84 [default: 600x800]
+    #[arg(long, value_name = "HxW")]
+    pub obs_size: Option<String>,
+    /// Stack the last K observations
+    #[arg(long, value_name = "K")]
+    pub frame_stack: Option<u32>,
+    /// Leave the HUD line out of pixel observations
+    #[arg(long)]
+    pub no_hud: bool,
+    /// Replay these action logs (`play --save-actions`) instead of a pilot; the rules come from the logs
+    #[arg(long, value_name = "LOG", num_args = 1..)]
+    pub from_logs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub options: GameOptions,
+}
+
+/// Runs `dataset`.
+pub fn run(args: DatasetArgs) -> Result<ExitCode> {
+    let python = std::env::var(PYTHON_VAR).unwrap_or_else(|_| "python3".to_string());
+    if !args.from_logs.is_empty() && !args.options.given().is_empty() {
+        usage_bail!("--from-logs replays the logs under their own rules: game options cannot be given with it");
+    }
+    check_python(&python)?;
+    let mut cmd = Command::new(&python);
+    cmd.args(["-m", "chopperscape.datasets", "--out", &args.out]);
+    let mut option = |name: &str, value: &str| {
+        cmd.args(["--option", &format!("{name}={value}")]);
+    };
+    option("obs_type", &args.obs_type);
+    if let Some(size) = &args.obs_size {
+        option("obs_size", size);
+    }
+    if let Some(k) = args.frame_stack {
+        option("frame_stack", &k.to_string());
+    }
+    if args.no_hud {
+        option("hud", "false");
+    }
+    for (name, value) in args.options.given() {
+        option(name, value);
+    }
+    if args.from_logs.is_empty() {
+        cmd.args([
+            "--policy",
+            &args.policy,
+            "--episodes",
+            &args.episodes.to_string(),
+            "--seed",
+            &args.seed.to_string(),
+        ]);
+    } else {
+        cmd.arg("--from-logs").args(&args.from_logs);
+    }
+    let status = cmd.status().with_context(|| format!("cannot run {python}"))?;
+    Ok(match status.code() {
+        Some(0) => ExitCode::SUCCESS,
+        Some(2) => ExitCode::from(2),
+        _ => ExitCode::FAILURE,
+    })
+}
+
+/// Fails with what to install when `python` cannot import the package and Minari.
+fn check_python(python: &str) -> Result<()> {
+    let probe = Command::new(python)
+        .args(["-c", "import chopperscape.datasets as d; d._minari()"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .output();
+    let hint = format!(
+        "`chopperscape dataset` writes Minari datasets through the chopperscape Python package: install it with \
+         `pip install chopperscape \"minari[hdf5]\" pillow` (or `pip install ./python` from the repository), or \
+         name the interpreter that has them with {PYTHON_VAR}=/path/to/python"
+    );
+    match probe {
+        Err(e) => anyhow::bail!("cannot run the Python interpreter `{python}` ({e}): {hint}"),
+        Ok(out) if !out.status.success() => {
+            let err = String::from_utf8_lossy(&out.stderr);
+            let last = err.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").trim();
+            anyhow::bail!("`{python}` cannot import chopperscape.datasets ({last}): {hint}")
+        }
+        Ok(_) => Ok(()),
+    }
+}

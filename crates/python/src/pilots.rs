@@ -1,0 +1,164 @@
+//! `chopperscape._core.Pilot` and `chopperscape._core.VectorPilot`: the built-in pilots of
+//! [`chopperscape::policy`], reading the world of an env of this module (never a Python-side copy of it).
+//!
+//! A pilot is made by name; the heuristic plans for the options of the env it flies (its `frame_skip` and
+//! `sticky_prob`), so it is built for an env's options the first time it sees that env, and rebuilt when it
+//! sees an env with other options. `random` draws from its own generator, seeded as the CLI's `demo` seeds it.
+
+use chopperscape::policy::{self, Policy};
+use chopperscape::{Action, Config};
+use numpy::PyArray1;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::env::PyEnv;
+use crate::vector::PyVectorEnv;
+
+/// One pilot by name, and the options it was built for.
+struct Built {
+    name: String,
+    seed: u64,
+    policy: Box<dyn Policy + Send + Sync>,
+    /// The options the policy plans for (`None`: not built for an env yet).
+    config: Option<Config>,
+}
+
+impl Built {
+    fn new(name: &str, seed: u64) -> PyResult<Built> {
+        let policy = policy::by_name(name, seed, &Config::default()).map_err(PyValueError::new_err)?;
+        Ok(Built { name: name.to_string(), seed, policy, config: None })
+    }
+
+    /// Makes the policy plan for `config`. `random` ignores the options, so its generator is never restarted.
+    fn fit(&mut self, config: &Config) {
+        if self.name != "random" && self.config.as_ref() != Some(config) {
+            self.policy = policy::by_name(&self.name, self.seed, config).expect("the name was checked");
+            self.config = Some(config.clone());
+        }
+    }
+
+    fn reseed(&mut self, seed: u64) {
+        self.seed = seed;
+        self.policy = policy::by_name(&self.name, seed, self.config.as_ref().unwrap_or(&Config::default()))
+            .expect("the name was checked");
+    }
+}
+
+/// A built-in pilot for one `chopperscape._core.Env`: `random` (seeded), `heuristic`, or a fixed action
+/// (`right`, `left`, `down`, `up`, `noop`).
+#[pyclass(name = "Pilot", module = "chopperscape._core")]
+pub(crate) struct PyPilot {
+    inner: Built,
+}
+
+#[pymethods]
+impl PyPilot {
+    #[new]
+    #[pyo3(signature = (name, seed = 0))]
+    fn new(name: &str, seed: u64) -> PyResult<PyPilot> {
+        Ok(PyPilot { inner: Built::new(name, seed)? })
+    }
+
+    /// The action (0..=4) for the env's current state.
+    fn act(&mut self, env: PyRef<'_, PyEnv>) -> u8 {
+        let env = env.core();
+        self.inner.fit(env.config());
+        self.inner.policy.act(env.world()) as u8
+    }
+
+    /// Starts over as if new with `seed` (`None`: the seed it has): `random` restarts its generator.
+    #[pyo3(signature = (seed = None))]
+    fn reset(&mut self, seed: Option<u64>) {
+        self.inner.reseed(seed.unwrap_or(self.inner.seed));
+    }
+
+    /// The pilot's name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+
+    /// The seed of its generator (used by `random` only).
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+}
+
+/// One pilot per environment of a `chopperscape._core.VectorEnv`; pilot `i` is seeded `seed + i`, as the
+/// environment `i` of a batch reset with `seed`. `act` computes the whole batch's actions with the GIL released.
+#[pyclass(name = "VectorPilot", module = "chopperscape._core")]
+pub(crate) struct PyVectorPilot {
+    pilots: Vec<Built>,
+    seed: u64,
+}
+
+#[pymethods]
+impl PyVectorPilot {
+    #[new]
+    #[pyo3(signature = (name, num_envs, seed = 0))]
+    fn new(name: &str, num_envs: usize, seed: u64) -> PyResult<PyVectorPilot> {
+        if num_envs == 0 {
+            return Err(PyValueError::new_err("invalid value 0 for option `num_envs`: allowed an integer >= 1"));
+        }
+        let pilots = (0..num_envs as u64).map(|i| Built::new(name, seed.wrapping_add(i))).collect::<PyResult<_>>()?;
+        Ok(PyVectorPilot { pilots, seed })
+    }
+
+    /// The `num_envs` actions (`int64`) for the batch's current states. An environment whose next step is an
+    /// autoreset (its action is ignored) gets 4 (Do Nothing), and its pilot draws nothing for it.
+    fn act<'py>(&mut self, py: Python<'py>, envs: PyRef<'py, PyVectorEnv>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let inner = envs.core();
+        if inner.num_envs() != self.pilots.len() {
+            return Err(PyValueError::new_err(format!(
+                "the vector env has {} environments but this pilot flies {}: make the pilot with num_envs={}",
+                inner.num_envs(),
+                self.pilots.len(),
+                inner.num_envs()
+            )));
+        }
+        let pilots = &mut self.pilots;
+        let actions: Vec<i64> = py.detach(|| {
+            pilots
+                .iter_mut()
+                .enumerate()
+                .map(|(i, pilot)| {
+                    if inner.pending_reset(i) {
+                        return Action::Noop as i64;
+                    }
+                    let env = inner.env(i);
+                    pilot.fit(env.config());
+                    pilot.policy.act(env.world()) as i64
+                })
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, actions))
+    }
+
+    /// Starts over as if new with `seed` (`None`: the seed it has): pilot `i` is seeded `seed + i`.
+    #[pyo3(signature = (seed = None))]
+    fn reset(&mut self, seed: Option<u64>) {
+        self.seed = seed.unwrap_or(self.seed);
+        for (i, p) in self.pilots.iter_mut().enumerate() {
+            p.reseed(self.seed.wrapping_add(i as u64));
+        }
+    }
+
+    /// The pilots' name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.pilots[0].name
+    }
+
+    /// Number of environments it flies.
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.pilots.len()
+    }
+
+    /// The seed of pilot 0 (pilot `i` has `seed + i`).
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+}
