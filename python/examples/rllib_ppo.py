@@ -11,7 +11,7 @@ Each env runner is a separate process (a Ray actor) that steps `--envs-per-runne
     env_steps,wall_s,episodes,mean_return,std_return,mean_length
 
 `env_steps`: env steps sampled so far; `wall_s`: seconds since training started; `episodes`: episodes finished so
-far; the others over the last 100 finished episodes (`nan` until one finishes). `--checkpoint DIR` saves the
+far; the others over the last 100 finished episodes (rows start once an episode has finished, as in the recipe). `--checkpoint DIR` saves the
 algorithm at the end; `--restore DIR` starts from such a checkpoint; `--summary FILE` writes a JSON summary
 (steps and seeds per runner, a digest of the policy's weights). See docs/rllib.md.
 """
@@ -33,6 +33,7 @@ CSV_COLUMNS = ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "
 #: Episodes the mean and std of each row are taken over.
 WINDOW = 100
 _FINISHED = "_chopperscape_finished"
+_SAMPLED = "_chopperscape_sampled"
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -104,20 +105,30 @@ def record_episode(*, episode, prev_episode_chunks, env_runner, **_: Any) -> Non
     env_runner.__dict__.setdefault(_FINISHED, []).append(record)
 
 
+def count_steps(*, env_runner, samples, **_: Any) -> None:
+    """RLlib callback (`on_sample_end`, in the env runner): counts the env steps this runner sampled (RLlib's
+    `num_env_steps_sampled_lifetime` on a runner is an estimate of the whole group's)."""
+    steps = sum(e.env_steps() for e in samples)
+    env_runner.__dict__[_SAMPLED] = env_runner.__dict__.get(_SAMPLED, 0) + steps
+
+
 def collect_episodes(env_runner: Any) -> list[tuple[int, float, int]]:
     """Takes the episodes `record_episode` kept on a runner (runs in the runner)."""
     return env_runner.__dict__.pop(_FINISHED, [])
 
 
-def runner_report(env_runner: Any) -> tuple[int, int, list, int]:
-    """(runner index, env steps it sampled, game seeds of its sub-envs, process id) of a runner (runs in it)."""
+def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
+    """(runner index, env steps it sampled, game seeds of its sub-envs, process id, Ray node id) of a runner."""
+    import ray
+
     import chopperscape.rllib
 
     return (
         int(env_runner.worker_index or 0),
-        int(env_runner.num_env_steps_sampled_lifetime),
+        int(env_runner.__dict__.get(_SAMPLED, 0)),
         chopperscape.rllib.runner_seeds(env_runner),
         os.getpid(),
+        ray.get_runtime_context().get_node_id(),
     )
 
 
@@ -207,7 +218,7 @@ def build_config(args: argparse.Namespace):
         )
         .learners(learner_class=return_scaled_learner() if args.norm_reward else None)
         .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=args.hidden, vf_share_layers=False))
-        .callbacks(on_episode_end=record_episode)
+        .callbacks(on_episode_end=record_episode, on_sample_end=count_steps)
         .debugging(seed=args.seed)
     )
 
@@ -278,15 +289,15 @@ def main(argv: list[str] | None = None) -> int:
                     episodes_per_runner[runner] += 1
                     episodes += 1
             env_steps = int(result["env_runners"]["num_env_steps_sampled_lifetime"])
-            if window:
+            if window:  # like the recipe, rows start once an episode has finished
                 returns = [r for r, _ in window]
                 mean = sum(returns) / len(returns)
                 std = math.sqrt(sum((r - mean) ** 2 for r in returns) / len(returns))
                 length = sum(n for _, n in window) / len(window)
+                out.writerow([env_steps, f"{wall:.2f}", episodes, f"{mean:.3f}", f"{std:.3f}", f"{length:.1f}"])
+                f.flush()
             else:
                 mean = std = length = math.nan
-            out.writerow([env_steps, f"{wall:.2f}", episodes, f"{mean:.3f}", f"{std:.3f}", f"{length:.1f}"])
-            f.flush()
             print(f"iter {iterations:4d}  steps {env_steps:9d}  episodes {episodes:6d}  "
                   f"return {mean:9.1f} ± {std:7.1f}  length {length:8.1f}  {wall:7.1f}s", flush=True)
             if wall >= args.minutes * 60 or (args.iterations is not None and iterations >= args.iterations):
@@ -298,9 +309,10 @@ def main(argv: list[str] | None = None) -> int:
         wall_s=round(time.monotonic() - start, 2),
         episodes=episodes,
         episodes_per_runner={str(k): v for k, v in sorted(episodes_per_runner.items())},
-        steps_per_runner={str(w): steps for w, steps, _, _ in reports},
-        seeds_per_runner={str(w): seeds for w, _, seeds, _ in reports},
-        pids_per_runner={str(w): pid for w, _, _, pid in reports},
+        steps_per_runner={str(w): steps for w, steps, *_ in reports},
+        seeds_per_runner={str(w): seeds for w, _, seeds, *_ in reports},
+        pids_per_runner={str(w): pid for w, _, _, pid, _ in reports},
+        nodes_per_runner={str(w): node for w, *_, node in reports},
         driver_pid=os.getpid(),
         weights_sha256=weights_digest(algo),
     )

@@ -231,8 +231,9 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     steps = [int(r["env_steps"]) for r in rows]
     assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
     # Both runners sampled, each its own process, none of them the driver.
-    assert sorted(summary["steps_per_runner"]) == ["1", "2"]
-    assert all(n > 0 for n in summary["steps_per_runner"].values())
+    per_runner = summary["steps_per_runner"]
+    assert sorted(per_runner) == ["1", "2"] and all(n > 0 for n in per_runner.values())
+    assert sum(per_runner.values()) == summary["env_steps"]
     assert sorted(summary["episodes_per_runner"]) == ["1", "2"]  # max_fuel 40: episodes of 40 steps
     pids = summary["pids_per_runner"]
     assert len({pids["1"], pids["2"], summary["driver_pid"]}) == 3
@@ -245,6 +246,7 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     assert restored["restored_weights_sha256"] == summary["weights_sha256"]
     assert restored["restored_env_steps"] == summary["env_steps"]
     assert int(rows2[0]["env_steps"]) >= summary["env_steps"] + 400  # the counters continue
+    assert sum(restored["steps_per_runner"].values()) == restored["env_steps"] - summary["env_steps"]
     assert restored["weights_sha256"] != summary["weights_sha256"]  # and training goes on from there
     seeds = [s for w in ("1", "2") for s in restored["seeds_per_runner"][w]]
     assert len(set(seeds)) == 8 and restored["seeds_per_runner"]["1"][0] == (3 + 1) * K + 1
