@@ -67,8 +67,9 @@ if [ "$(cat "$rstamp" 2>/dev/null)" != "$RAY_SPEC torch" ] || [ ! -x .venv-rllib
 fi
 rsite=$("$RPY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 pkg=$("$PY" -c 'import chopperscape, os; print(os.path.dirname(os.path.abspath(chopperscape.__file__)))')
-if [ -e "$rsite/chopperscape" ] && [ ! -L "$rsite/chopperscape" ]; then
-  quiet "$RPY" -m pip uninstall --disable-pip-version-check -y -q chopperscape
+if [ -e "$rsite/chopperscape" ] && [ ! -L "$rsite/chopperscape" ]; then  # a copy installed there by hand
+  quiet "$RPY" -m pip uninstall --disable-pip-version-check -y -q chopperscape || true
+  rm -rf "$rsite/chopperscape"
 fi
 ln -sfn "$pkg" "$rsite/chopperscape"
 log=$(mktemp)
