@@ -38,7 +38,8 @@ hence two formulas; each is one-to-one.) With `config.seed` unset every env draw
 from __future__ import annotations
 
 import os
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import gymnasium as gym
 import numpy as np

@@ -11,9 +11,9 @@ Each env runner is a separate process (a Ray actor) that steps `--envs-per-runne
     env_steps,wall_s,episodes,mean_return,std_return,mean_length
 
 `env_steps`: env steps sampled so far; `wall_s`: seconds since training started; `episodes`: episodes finished so
-far; the others over the last 100 finished episodes (rows start once an episode has finished, as in the recipe). `--checkpoint DIR` saves the
-algorithm at the end; `--restore DIR` starts from such a checkpoint; `--summary FILE` writes a JSON summary
-(steps and seeds per runner, a digest of the policy's weights). See docs/rllib.md.
+far; the others over the last 100 finished episodes (rows start once an episode has finished, as in the recipe).
+`--checkpoint DIR` saves the algorithm at the end; `--restore DIR` starts from such a checkpoint; `--summary FILE`
+writes a JSON summary (steps, seeds, PIDs and nodes per runner, a digest of the policy's weights). See docs/rllib.md.
 """
 
 from __future__ import annotations
@@ -37,7 +37,9 @@ _SAMPLED = "_chopperscape_sampled"
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     p.add_argument("--env-runners", type=int, default=2, help="env runner processes (0: sample in this process)")
     p.add_argument("--envs-per-runner", type=int, default=16, help="games each runner steps as one batch")
     p.add_argument("--cpus-per-runner", type=float, default=1, help="CPUs Ray reserves for each runner")
@@ -119,9 +121,8 @@ def collect_episodes(env_runner: Any) -> list[tuple[int, float, int]]:
 
 def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
     """(runner index, env steps it sampled, game seeds of its sub-envs, process id, Ray node id) of a runner."""
-    import ray
-
     import chopperscape.rllib
+    import ray
 
     return (
         int(env_runner.worker_index or 0),
@@ -152,7 +153,8 @@ def return_scaled_learner():
             lens = [len(e) for e in self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False)]
             for module_batch in batch.values():
                 rewards = module_batch[Columns.REWARDS]
-                r = rewards.detach().cpu().numpy().astype(np.float64) if hasattr(rewards, "detach") else np.asarray(rewards, np.float64)
+                r = rewards.detach().cpu().numpy() if hasattr(rewards, "detach") else np.asarray(rewards)
+                r = r.astype(np.float64)
                 if r.shape[0] != sum(lens):
                     continue  # not one row per episode step (padded): leave it
                 # Discounted return accumulated forward within each episode chunk.
@@ -182,7 +184,8 @@ def return_scaled_learner():
         def build(self) -> None:
             super().build()
             if self._learner_connector is not None:
-                self._learner_connector.insert_before(GeneralAdvantageEstimation, ReturnScaling(gamma=self.config.gamma))
+                scaling = ReturnScaling(gamma=self.config.gamma)
+                self._learner_connector.insert_before(GeneralAdvantageEstimation, scaling)
 
     return ReturnScaledPPOLearner
 
