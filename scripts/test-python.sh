@@ -48,8 +48,7 @@ fi
 
 # Ray RLlib (python/tests/test_rllib.py, docs/rllib.md). Ray pins gymnasium==1.2.2, so RLlib gets its own
 # environment, .venv-rllib, with ray[rllib] and torch from PyPI and this package linked in from .venv (built
-# above). A fresh install downloads about 2.5 GB (torch with its CUDA libraries) and takes 3-4 minutes; the
-# environment is about 6 GB. CHOPPERSCAPE_RLLIB=0 skips it; where it cannot be installed, the RLlib tests are skipped.
+# above). A fresh install took 195 s here and makes a 6 GB environment (torch's wheel brings CUDA libraries). CHOPPERSCAPE_RLLIB=0 skips it; where it cannot be installed, the RLlib tests are skipped.
 RAY_SPEC="ray[rllib]==2.60.0"
 RPY=.venv-rllib/bin/python
 rstamp=.venv-rllib/.chopperscape-rllib
