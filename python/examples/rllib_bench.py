@@ -26,8 +26,12 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=10.0, help="timed sampling per configuration and action mode")
     p.add_argument("--chunk", type=int, default=1024, help="env steps per sample() call of each runner")
     p.add_argument("--obs-type", default="features")
+    p.add_argument("--torch-threads", type=int, default=1, help="torch threads of the driver (as rllib_ppo.py)")
     args = p.parse_args()
     import ray
+    import torch
+
+    torch.set_num_threads(args.torch_threads)
 
     ray.init(logging_level="ERROR")
     print(f"| runners | envs/runner | sub-envs | policy steps/s | random steps/s |  (CPUs: {os.cpu_count()}, "
