@@ -48,13 +48,14 @@ from gymnasium.vector import AutoresetMode
 from .vector import VectorEnv, default_threads
 
 try:
+    from ray.rllib.connectors.env_to_module.observation_preprocessor import SingleAgentObservationPreprocessor
     from ray.tune.registry import register_env
 except ImportError as e:  # pragma: no cover - depends on the installation
     raise ImportError(
         "chopperscape.rllib needs Ray RLlib, which is not installed: pip install 'ray[rllib]' torch"
     ) from e
 
-__all__ = ["ENV_NAME", "SEED_STRIDE", "env_creator", "register", "runner_seeds"]
+__all__ = ["ENV_NAME", "SEED_STRIDE", "FloatPixels", "check_env_config", "env_creator", "register", "runner_seeds"]
 
 #: The name this module registers with RLlib (the same as Gymnasium's id).
 ENV_NAME = "ChopperScape-v0"
@@ -71,9 +72,10 @@ def env_creator(config: Mapping[str, Any]) -> gym.Env | gym.vector.VectorEnv:
 
     `config` is the `env_config` of the algorithm (RLlib's `EnvContext`): every option of `ChopperScapeEnv`,
     plus `max_episode_steps` (default 10000, as `gymnasium.make`) and, for the native batch, `num_threads`.
-    An unknown option or a bad value raises `ValueError` naming it.
+    An unknown option or a bad value raises `ValueError` naming it. Lists (what JSON and YAML configs hold) are
+    taken as tuples: `"obs_size": [84, 84]` is `(84, 84)`.
     """
-    options = dict(config)
+    options = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(config).items()}
     num_envs = options.pop("num_envs", None)
     for key in ("autoreset_mode", "copy"):
         if key in options:
@@ -92,6 +94,13 @@ def env_creator(config: Mapping[str, Any]) -> gym.Env | gym.vector.VectorEnv:
     if env.num_envs >= SEED_STRIDE:
         raise ValueError(f"invalid value {num_envs} for `num_envs_per_env_runner`: allowed 1..{SEED_STRIDE - 1}")
     return RunnerSeededVectorEnv(env)
+
+
+def check_env_config(env_config: Mapping[str, Any]) -> None:
+    """Builds (and drops) one env from `env_config`, so that a bad option raises its `ValueError` here, in the
+    driver: raised in a remote env runner, RLlib 2.60 logs it but then fails with an unrelated `IndexError`."""
+    env = env_creator({**env_config, "num_envs": 1})
+    env.close()
 
 
 def register(name: str = ENV_NAME) -> str:
@@ -150,6 +159,21 @@ class RunnerSeededEnv(gym.Wrapper):
             seed = int(seed) * SEED_STRIDE + self.worker_index
             self.reset_seed = seed
         return self.env.reset(seed=seed, options=options)
+
+
+class FloatPixels(SingleAgentObservationPreprocessor):
+    """Pixel observations (`rgb`, `grayscale`, stacked or not: `uint8`) as `float32` in [0, 1], with a channel axis
+    for plain grayscale: what RLlib's default CNN takes (it neither casts `uint8` nor reads 2-D boxes). Use it as
+    `config.env_runners(env_to_module_connector=lambda env, spaces, device: FloatPixels())`."""
+
+    def recompute_output_observation_space(self, input_observation_space, input_action_space):
+        shape = tuple(input_observation_space.shape)
+        return gym.spaces.Box(0.0, 1.0, shape + (1,) if len(shape) == 2 else shape, np.float32)
+
+    def preprocess(self, observation, episode):
+        obs = np.asarray(observation)
+        obs = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs.astype(np.float32, copy=False)
+        return obs[..., None] if obs.ndim == 2 else obs
 
 
 def _runner_threads(num_envs: int) -> int:

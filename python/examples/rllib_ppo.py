@@ -209,8 +209,13 @@ def build_config(args: argparse.Namespace):
             num_envs_per_env_runner=args.envs_per_runner,
             num_cpus_per_env_runner=args.cpus_per_runner,
             gym_env_vectorize_mode="vector_entry_point" if args.native else "sync",
-            # Observations normalised by running mean and std (the filter's state is synced and checkpointed).
-            env_to_module_connector=lambda env, spaces, device: MeanStdFilter(),
+            # Features normalised by running mean and std (the filter's state is synced and checkpointed);
+            # pixels as floats in [0, 1] with a channel axis, for RLlib's default CNN.
+            env_to_module_connector=(
+                (lambda env, spaces, device: MeanStdFilter())
+                if args.env_config.get("obs_type") == "features"
+                else (lambda env, spaces, device: chopperscape.rllib.FloatPixels())
+            ),
         )
         .training(
             train_batch_size_per_learner=args.train_batch_size,
@@ -268,6 +273,12 @@ def main(argv: list[str] | None = None) -> int:
     # Ray limits its workers' threads to their CPUs, not the driver's: torch's default (all cores) oversubscribes
     # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
     torch.set_num_threads(args.torch_threads)
+    import chopperscape.rllib
+
+    try:
+        chopperscape.rllib.check_env_config(args.env_config)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
     connect(args)
     algo = build_config(args).build_algo()
     summary: dict[str, Any] = {"native": args.native, "env_runners": args.env_runners,

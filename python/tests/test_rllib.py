@@ -66,6 +66,22 @@ def test_single_creator_is_a_time_limited_env_seeded_by_its_runner():
     np.testing.assert_array_equal(obs, gym.make("ChopperScape-v0", **FEATURES).reset(seed=7 * K + 3)[0])
 
 
+def test_creator_takes_lists_from_json_configs_as_tuples():
+    env = crl.env_creator({"num_envs": 2, "obs_type": "grayscale", "obs_size": [84, 84], "frame_stack": 4})
+    assert env.single_observation_space.shape == (84, 84, 4)
+    single = crl.env_creator(EnvContext({"obs_type": "grayscale", "obs_size": [42, 42]}, worker_index=1))
+    assert single.observation_space.shape == (42, 42)
+
+
+def test_example_rejects_a_bad_env_config_before_starting_ray():
+    run = subprocess.run(
+        [sys.executable, str(EXAMPLE), "--env-config", '{"obs_type": "nope"}', "--iterations", "1"],
+        check=False, capture_output=True, text=True, timeout=120, env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
+    )
+    assert run.returncode != 0
+    assert run.stderr.strip().splitlines()[-1].startswith("error: invalid value nope for option `obs_type`")
+
+
 @pytest.mark.parametrize(
     "config, message",
     [
@@ -91,7 +107,10 @@ def test_runner_threads_follow_the_cpus_ray_gave_the_runner(monkeypatch):
 
 
 # Each runner built in this one process registers RLlib's env id again (Gymnasium warns about it).
-@pytest.mark.filterwarnings("ignore:.*Overriding environment rllib-single-agent-env-v0")
+reregistering = pytest.mark.filterwarnings("ignore:.*Overriding environment rllib-single-agent-env-v0")
+
+
+@reregistering
 @pytest.mark.parametrize("mode", ["vector_entry_point", "sync"])
 def test_rllib_env_runners_seed_every_sub_env_differently(mode):
     """RLlib's own runners (built here in-process, as Ray builds them remotely): runner w resets with seed + w,
@@ -118,6 +137,26 @@ def test_rllib_env_runners_seed_every_sub_env_differently(mode):
     else:
         assert seeds == [(11 + w + i) * K + w for w in (1, 2, 3) for i in range(4)]
     assert len(set(seeds)) == 12
+
+
+@reregistering
+def test_float_pixels_feed_rllibs_default_cnn_with_grayscale_frames():
+    config = (
+        PPOConfig()
+        .environment(crl.ENV_NAME, env_config={"obs_type": "grayscale", "obs_size": [84, 84]})
+        .env_runners(num_env_runners=0, num_envs_per_env_runner=2, gym_env_vectorize_mode="vector_entry_point",
+                     env_to_module_connector=lambda env, spaces, device: crl.FloatPixels())
+    )
+    runner = SingleAgentEnvRunner(config=config, worker_index=0, num_workers=0)
+    episodes = runner.sample(num_timesteps=4)
+    assert sum(e.env_steps() for e in episodes) == 4
+    space = crl.FloatPixels().recompute_output_observation_space(runner.env.single_observation_space, None)
+    assert space.shape == (84, 84, 1) and space.dtype == np.float32
+    frame = runner.env.unwrapped.reset(seed=1)[0][0]
+    out = crl.FloatPixels().preprocess(frame, None)
+    assert out.shape == (84, 84, 1) and out.dtype == np.float32
+    np.testing.assert_allclose(out[..., 0], frame / 255.0, rtol=1e-6)
+    runner.stop()
 
 
 # --- a real Ray cluster on loopback ------------------------------------------------------------------------------
