@@ -53,3 +53,39 @@ else
   rm -f "$log"
   exit "$rc"
 fi
+
+# Ray RLlib (python/tests/test_rllib.py, docs/rllib.md). Ray pins gymnasium==1.2.2, so RLlib gets its own
+# environment, .venv-rllib, with ray[rllib] and torch from PyPI and this package linked in from .venv (built
+# above). A fresh install took 195 s here and makes a 6 GB environment (torch's wheel brings CUDA libraries). CHOPPERSCAPE_RLLIB=0 skips it; where it cannot be installed, the RLlib tests are skipped.
+RAY_SPEC="ray[rllib]==2.60.0"
+RPY=.venv-rllib/bin/python
+rstamp=.venv-rllib/.chopperscape-rllib
+if [ "${CHOPPERSCAPE_RLLIB:-1}" = 0 ]; then
+  say "skipped: the RLlib tests (CHOPPERSCAPE_RLLIB=0)"
+  exit 0
+fi
+if [ "$(cat "$rstamp" 2>/dev/null)" != "$RAY_SPEC torch" ] || [ ! -x .venv-rllib/bin/ray ]; then
+  [ -x "$RPY" ] || quiet python3 -m venv .venv-rllib
+  if ! quiet "$RPY" -m pip install --disable-pip-version-check -q "$RAY_SPEC" torch "pytest>=7"; then
+    say "skipped: the RLlib tests (could not install $RAY_SPEC and torch from PyPI)"
+    exit 0
+  fi
+  echo "$RAY_SPEC torch" >"$rstamp"
+fi
+rsite=$("$RPY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+pkg=$("$PY" -c 'import chopperscape, os; print(os.path.dirname(os.path.abspath(chopperscape.__file__)))')
+if [ -e "$rsite/chopperscape" ] && [ ! -L "$rsite/chopperscape" ]; then  # a copy installed there by hand
+  quiet "$RPY" -m pip uninstall --disable-pip-version-check -y -q chopperscape || true
+  rm -rf "$rsite/chopperscape"
+fi
+ln -sfn "$pkg" "$rsite/chopperscape"
+log=$(mktemp)
+if "$RPY" -m pytest -q -p no:cacheprovider -c python/pyproject.toml python/tests/test_rllib.py >"$log" 2>&1; then
+  grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
+  rm -f "$log"
+else
+  rc=$?
+  cat "$log" >&2
+  rm -f "$log"
+  exit "$rc"
+fi

@@ -1,0 +1,353 @@
+#!/usr/bin/env python3
+"""PPO on ChopperScape-v0 with Ray RLlib (new API stack), on this machine or on a Ray cluster.
+
+    python python/examples/rllib_ppo.py --minutes 10 --csv rllib_ppo.csv             # a local Ray
+    ray start --head ...; python python/examples/rllib_ppo.py --address auto ...     # join a running cluster
+
+Each env runner is a separate process (a Ray actor) that steps `--envs-per-runner` games: by default one native
+`chopperscape.VectorEnv` (one Rust call a batch), or with `--python-envs` as many Python envs in RLlib's
+`SyncVectorEnv`. Every iteration appends a row to `--csv`, with the columns of the single-machine recipe:
+
+    env_steps,wall_s,episodes,mean_return,std_return,mean_length
+
+`env_steps`: env steps sampled so far; `wall_s`: seconds since training started; `episodes`: episodes finished so
+far; the others over the last 100 finished episodes (rows start once an episode has finished, as in the recipe).
+`--checkpoint DIR` saves the algorithm at the end; `--restore DIR` starts from such a checkpoint; `--summary FILE`
+writes a JSON summary (steps, seeds, PIDs and nodes per runner, a digest of the policy's weights). See docs/rllib.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import csv
+import hashlib
+import json
+import math
+import os
+import sys
+import time
+from typing import Any
+
+CSV_COLUMNS = ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
+#: Episodes the mean and std of each row are taken over.
+WINDOW = 100
+_FINISHED = "_chopperscape_finished"
+_SAMPLED = "_chopperscape_sampled"
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument("--env-runners", type=int, default=2, help="env runner processes (0: sample in this process)")
+    p.add_argument("--envs-per-runner", type=int, default=16, help="games each runner steps as one batch")
+    p.add_argument("--cpus-per-runner", type=float, default=1, help="CPUs Ray reserves for each runner")
+    p.add_argument("--address", default=None, help="Ray cluster to join ('auto', or host:port); default: a local Ray")
+    p.add_argument("--minutes", type=float, default=30.0, help="training time (stops after the iteration past it)")
+    p.add_argument("--iterations", type=int, default=None, help="stop after this many iterations (also)")
+    p.add_argument("--csv", default="rllib_ppo.csv", help="learning curve, one row per iteration (overwritten)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--native", dest="native", action="store_true", default=True,
+                      help="one native VectorEnv per runner (default)")
+    mode.add_argument("--python-envs", dest="native", action="store_false",
+                      help="Python sub-envs in RLlib's SyncVectorEnv instead")
+    p.add_argument("--obs-type", default="features", help="env option obs_type (default: features)")
+    p.add_argument("--env-config", default="{}", help="more env options as JSON, e.g. '{\"alien_prob\": 0.1}'")
+    p.add_argument("--seed", type=int, default=0, help="RLlib seed (runner w, env i get distinct game seeds)")
+    p.add_argument("--train-batch-size", type=int, default=8192, help="env steps per training iteration")
+    p.add_argument("--minibatch-size", type=int, default=1024)
+    p.add_argument("--epochs", type=int, default=4, help="passes over each train batch")
+    p.add_argument("--lr", type=float, default=3e-4)
+    p.add_argument("--gamma", type=float, default=0.995)
+    p.add_argument("--lambda", dest="lambda_", type=float, default=0.95)
+    p.add_argument("--entropy", type=float, default=0.01, help="entropy bonus coefficient")
+    p.add_argument("--no-norm-reward", dest="norm_reward", action="store_false",
+                   help="do not scale rewards by the running std of the discounted return")
+    p.add_argument("--hidden", default="128,128", help="hidden layer sizes of the policy and value networks")
+    p.add_argument("--torch-threads", type=int, default=1,
+                   help="torch threads of this process (the learner, and the sampler with 0 runners); runners get "
+                        "their CPUs' worth from Ray")
+    p.add_argument("--checkpoint", default=None, help="save the algorithm to this directory at the end")
+    p.add_argument("--restore", default=None, help="start from a checkpoint saved by --checkpoint")
+    p.add_argument("--summary", default=None, help="write a JSON summary to this file at the end")
+    args = p.parse_args(argv)
+    if args.env_runners < 0:
+        p.error(f"--env-runners must be >= 0, got {args.env_runners}")
+    if args.envs_per_runner < 1:
+        p.error(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
+    if args.cpus_per_runner <= 0:
+        p.error(f"--cpus-per-runner must be > 0, got {args.cpus_per_runner}")
+    if not args.minutes > 0:
+        p.error(f"--minutes must be > 0, got {args.minutes}")
+    if args.torch_threads < 1:
+        p.error(f"--torch-threads must be >= 1, got {args.torch_threads}")
+    if args.iterations is not None and args.iterations < 1:
+        p.error(f"--iterations must be >= 1, got {args.iterations}")
+    try:
+        extra = json.loads(args.env_config)
+    except json.JSONDecodeError as e:
+        p.error(f"--env-config is not JSON ({e}): give an object such as '{{\"alien_prob\": 0.1}}'")
+    if not isinstance(extra, dict):
+        p.error("--env-config must be a JSON object such as '{\"alien_prob\": 0.1}'")
+    args.env_config = {"obs_type": args.obs_type, **extra}
+    try:
+        args.hidden = [int(h) for h in args.hidden.split(",")]
+    except ValueError:
+        p.error(f"--hidden must be comma-separated integers such as 64,64, got {args.hidden!r}")
+    if args.restore is not None and not os.path.isdir(args.restore):
+        p.error(f"--restore {args.restore!r} is not a directory (give one written by --checkpoint)")
+    return args
+
+
+def record_episode(*, episode, prev_episode_chunks, env_runner, **_: Any) -> None:
+    """RLlib callback (`on_episode_end`, in the env runner): keeps (runner, return, length) of each finished
+    episode on the runner, for the driver to collect after each iteration."""
+    chunks = [*prev_episode_chunks, episode]
+    record = (
+        int(env_runner.worker_index or 0),
+        float(sum(c.get_return() for c in chunks)),
+        int(sum(len(c) for c in chunks)),
+    )
+    env_runner.__dict__.setdefault(_FINISHED, []).append(record)
+
+
+def count_steps(*, env_runner, samples, **_: Any) -> None:
+    """RLlib callback (`on_sample_end`, in the env runner): counts the env steps this runner sampled (RLlib's
+    `num_env_steps_sampled_lifetime` on a runner is an estimate of the whole group's)."""
+    steps = sum(e.env_steps() for e in samples)
+    env_runner.__dict__[_SAMPLED] = env_runner.__dict__.get(_SAMPLED, 0) + steps
+
+
+def collect_episodes(env_runner: Any) -> list[tuple[int, float, int]]:
+    """Takes the episodes `record_episode` kept on a runner (runs in the runner)."""
+    return env_runner.__dict__.pop(_FINISHED, [])
+
+
+def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
+    """(runner index, env steps it sampled, game seeds of its sub-envs, process id, Ray node id) of a runner."""
+    import chopperscape.rllib
+    import ray
+
+    return (
+        int(env_runner.worker_index or 0),
+        int(env_runner.__dict__.get(_SAMPLED, 0)),
+        chopperscape.rllib.runner_seeds(env_runner),
+        os.getpid(),
+        ray.get_runtime_context().get_node_id(),
+    )
+
+
+def return_scaled_learner():
+    """A PPO learner that divides rewards by the running standard deviation of the discounted return before
+    GAE, as the single-machine recipe does (and SB3's VecNormalize): RLlib has no reward normaliser for the new API
+    stack. The episode returns the env runners report stay the game's own."""
+    import numpy as np
+    from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
+    from ray.rllib.connectors.connector_v2 import ConnectorV2
+    from ray.rllib.connectors.learner import GeneralAdvantageEstimation
+    from ray.rllib.core.columns import Columns
+
+    class ReturnScaling(ConnectorV2):
+        def __init__(self, input_observation_space=None, input_action_space=None, *, gamma: float = 0.99, **kw):
+            super().__init__(input_observation_space, input_action_space, **kw)
+            self.gamma = gamma
+            self.mean, self.var, self.count = 0.0, 1.0, 1e-4
+
+        def __call__(self, *, rl_module, batch, episodes, **kwargs):
+            lens = [len(e) for e in self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False)]
+            for module_batch in batch.values():
+                rewards = module_batch[Columns.REWARDS]
+                r = rewards.detach().cpu().numpy() if hasattr(rewards, "detach") else np.asarray(rewards)
+                r = r.astype(np.float64)
+                if r.shape[0] != sum(lens):
+                    continue  # not one row per episode step (padded): leave it
+                # Discounted return accumulated forward within each episode chunk.
+                returns, start = np.empty_like(r), 0
+                for n in lens:
+                    acc = 0.0
+                    for t in range(start, start + n):
+                        acc = acc * self.gamma + r[t]
+                        returns[t] = acc
+                    start += n
+                m, v, k = returns.mean(), returns.var(), returns.shape[0]
+                delta, total = m - self.mean, self.count + k
+                self.mean += delta * k / total
+                self.var = (self.var * self.count + v * k + delta**2 * self.count * k / total) / total
+                self.count = total
+                scale = 1.0 / np.sqrt(self.var + 1e-8)
+                module_batch[Columns.REWARDS] = rewards * scale
+            return batch
+
+        def get_state(self, components=None, *, not_components=None, **kwargs):
+            return {"mean": self.mean, "var": self.var, "count": self.count}
+
+        def set_state(self, state):
+            self.mean, self.var, self.count = state["mean"], state["var"], state["count"]
+
+    class ReturnScaledPPOLearner(PPOTorchLearner):
+        def build(self) -> None:
+            super().build()
+            if self._learner_connector is not None:
+                scaling = ReturnScaling(gamma=self.config.gamma)
+                self._learner_connector.insert_before(GeneralAdvantageEstimation, scaling)
+
+    return ReturnScaledPPOLearner
+
+
+def build_config(args: argparse.Namespace):
+    import chopperscape.rllib  # registers "ChopperScape-v0" with RLlib
+    from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
+    from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+
+    return (
+        PPOConfig()
+        .environment(chopperscape.rllib.ENV_NAME, env_config=args.env_config)
+        .env_runners(
+            num_env_runners=args.env_runners,
+            num_envs_per_env_runner=args.envs_per_runner,
+            num_cpus_per_env_runner=args.cpus_per_runner,
+            gym_env_vectorize_mode="vector_entry_point" if args.native else "sync",
+            # Features normalised by running mean and std (the filter's state is synced and checkpointed);
+            # pixels as floats in [0, 1] with a channel axis, for RLlib's default CNN.
+            env_to_module_connector=(
+                (lambda env, spaces, device: MeanStdFilter())
+                if args.env_config.get("obs_type") == "features"
+                else (lambda env, spaces, device: chopperscape.rllib.FloatPixels())
+            ),
+        )
+        .training(
+            train_batch_size_per_learner=args.train_batch_size,
+            minibatch_size=args.minibatch_size,
+            num_epochs=args.epochs,
+            lr=args.lr,
+            gamma=args.gamma,
+            lambda_=args.lambda_,
+            entropy_coeff=args.entropy,
+            vf_loss_coeff=0.5,
+            vf_clip_param=math.inf,  # rewards are scaled (below); RLlib's default clips the value loss at 10
+            grad_clip=0.5,
+        )
+        .learners(learner_class=return_scaled_learner() if args.norm_reward else None)
+        .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=args.hidden, vf_share_layers=False))
+        .callbacks(on_episode_end=record_episode, on_sample_end=count_steps)
+        .debugging(seed=args.seed)
+    )
+
+
+def weights_digest(algo: Any) -> str:
+    """SHA-256 of the learner's policy weights (names and values), to compare a checkpoint with its restore."""
+    import numpy as np
+
+    weights = algo.learner_group.get_weights()
+    h = hashlib.sha256()
+    for module_id in sorted(weights):
+        for name in sorted(weights[module_id]):
+            h.update(f"{module_id}/{name}".encode())
+            h.update(np.ascontiguousarray(np.asarray(weights[module_id][name])).tobytes())
+    return h.hexdigest()
+
+
+def connect(args: argparse.Namespace) -> None:
+    import ray
+
+    if args.address is None:
+        ray.init(logging_level="WARNING")
+    else:
+        ray.init(address=args.address, logging_level="WARNING")
+    need = args.env_runners * args.cpus_per_runner
+    have = ray.cluster_resources().get("CPU", 0)
+    if need > have:
+        raise SystemExit(
+            f"error: {args.env_runners} env runners x {args.cpus_per_runner} CPUs need {need:g} CPUs, the Ray "
+            f"cluster has {have:g}: lower --env-runners or --cpus-per-runner, or add nodes"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    import ray
+    import torch
+
+    # Ray limits its workers' threads to their CPUs, not the driver's: torch's default (all cores) oversubscribes
+    # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
+    torch.set_num_threads(args.torch_threads)
+    import chopperscape.rllib
+
+    try:
+        chopperscape.rllib.check_env_config(args.env_config)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
+    connect(args)
+    algo = build_config(args).build_algo()
+    summary: dict[str, Any] = {"native": args.native, "env_runners": args.env_runners,
+                               "envs_per_runner": args.envs_per_runner}
+    if args.restore:
+        algo.restore_from_path(os.path.abspath(args.restore))
+        summary["restored_weights_sha256"] = weights_digest(algo)
+        summary["restored_env_steps"] = int(
+            algo.metrics.peek(("env_runners", "num_env_steps_sampled_lifetime"), default=0)
+        )
+    group = algo.env_runner_group
+    window: collections.deque = collections.deque(maxlen=WINDOW)
+    episodes_per_runner: collections.Counter = collections.Counter()
+    episodes = 0
+    env_steps = 0
+    iterations = 0
+    csv_dir = os.path.dirname(os.path.abspath(args.csv))
+    os.makedirs(csv_dir, exist_ok=True)
+    start = time.monotonic()
+    with open(args.csv, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(CSV_COLUMNS)
+        f.flush()
+        while True:
+            result = algo.train()
+            iterations += 1
+            wall = time.monotonic() - start
+            for runner_episodes in group.foreach_env_runner(collect_episodes, local_env_runner=True):
+                for runner, ret, length in runner_episodes:
+                    window.append((ret, length))
+                    episodes_per_runner[runner] += 1
+                    episodes += 1
+            env_steps = int(result["env_runners"]["num_env_steps_sampled_lifetime"])
+            if window:  # like the recipe, rows start once an episode has finished
+                returns = [r for r, _ in window]
+                mean = sum(returns) / len(returns)
+                std = math.sqrt(sum((r - mean) ** 2 for r in returns) / len(returns))
+                length = sum(n for _, n in window) / len(window)
+                out.writerow([env_steps, f"{wall:.2f}", episodes, f"{mean:.3f}", f"{std:.3f}", f"{length:.1f}"])
+                f.flush()
+            else:
+                mean = std = length = math.nan
+            print(f"iter {iterations:4d}  steps {env_steps:9d}  episodes {episodes:6d}  "
+                  f"return {mean:9.1f} ± {std:7.1f}  length {length:8.1f}  {wall:7.1f}s", flush=True)
+            if wall >= args.minutes * 60 or (args.iterations is not None and iterations >= args.iterations):
+                break
+    reports = [r for r in group.foreach_env_runner(runner_report, local_env_runner=True) if r[2]]
+    summary.update(
+        iterations=iterations,
+        env_steps=env_steps,
+        wall_s=round(time.monotonic() - start, 2),
+        episodes=episodes,
+        episodes_per_runner={str(k): v for k, v in sorted(episodes_per_runner.items())},
+        steps_per_runner={str(w): steps for w, steps, *_ in reports},
+        seeds_per_runner={str(w): seeds for w, _, seeds, *_ in reports},
+        pids_per_runner={str(w): pid for w, _, _, pid, _ in reports},
+        nodes_per_runner={str(w): node for w, *_, node in reports},
+        driver_pid=os.getpid(),
+        weights_sha256=weights_digest(algo),
+    )
+    if args.checkpoint:
+        summary["checkpoint"] = algo.save_to_path(os.path.abspath(args.checkpoint))
+    if args.summary:
+        with open(args.summary, "w") as f:
+            json.dump(summary, f, indent=1)
+    algo.stop()
+    ray.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,290 @@
+"""Ray RLlib (new API stack): ChopperScape-v0 by name in RLlib's env runners, the native batch per runner, seeds
+distinct across runners and sub-envs, and PPO on a real local Ray cluster (`ray start --head` on loopback),
+driven by python/examples/rllib_ppo.py through `--address`.
+
+Ray pins its own Gymnasium, so scripts/test-python.sh runs this file in a second environment (.venv-rllib);
+elsewhere it is skipped.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import secrets
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("ray", reason="Ray is not installed: pip install 'ray[rllib]' torch (scripts/test-python.sh "
+                    "does, into .venv-rllib)")
+pytest.importorskip("ray.rllib", reason="RLlib is not installed: pip install 'ray[rllib]' torch")
+pytest.importorskip("torch", reason="torch is not installed (RLlib's PPO needs it): pip install torch")
+
+import chopperscape  # noqa: E402
+import chopperscape.rllib as crl  # noqa: E402
+import gymnasium as gym  # noqa: E402
+from ray.rllib.algorithms.ppo import PPOConfig  # noqa: E402
+from ray.rllib.env.env_context import EnvContext  # noqa: E402
+from ray.rllib.env.single_agent_env_runner import SingleAgentEnvRunner  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE = ROOT / "python" / "examples" / "rllib_ppo.py"
+K = crl.SEED_STRIDE
+FEATURES = {"obs_type": "features"}
+
+
+def test_importing_chopperscape_does_not_import_ray():
+    code = "import sys, chopperscape; assert not any(m == 'ray' or m.startswith('ray.') for m in sys.modules)"
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+def test_vector_creator_builds_the_native_batch_and_remaps_seeds():
+    env = crl.env_creator({**FEATURES, "num_envs": 3, "lives": 2})
+    assert isinstance(env.unwrapped, chopperscape.VectorEnv)
+    assert env.num_envs == 3 and env.unwrapped._options["lives"] == 2
+    obs, _ = env.reset(seed=5)
+    assert env.reset_seeds == [5 * K, 5 * K + 1, 5 * K + 2]
+    for i, seed in enumerate(env.reset_seeds):
+        single = gym.make("ChopperScape-v0", lives=2, **FEATURES)
+        np.testing.assert_array_equal(obs[i], single.reset(seed=seed)[0])
+
+
+def test_single_creator_is_a_time_limited_env_seeded_by_its_runner():
+    env = crl.env_creator(EnvContext({**FEATURES, "num_threads": 2}, worker_index=3, num_workers=4))
+    assert env.spec.max_episode_steps == 10_000
+    obs, _ = env.reset(seed=7)
+    assert env.reset_seed == 7 * K + 3
+    np.testing.assert_array_equal(obs, gym.make("ChopperScape-v0", **FEATURES).reset(seed=7 * K + 3)[0])
+
+
+def test_creator_takes_lists_from_json_configs_as_tuples():
+    env = crl.env_creator({"num_envs": 2, "obs_type": "grayscale", "obs_size": [84, 84], "frame_stack": 4})
+    assert env.single_observation_space.shape == (84, 84, 4)
+    single = crl.env_creator(EnvContext({"obs_type": "grayscale", "obs_size": [42, 42]}, worker_index=1))
+    assert single.observation_space.shape == (42, 42)
+
+
+def test_example_rejects_a_bad_env_config_before_starting_ray():
+    run = subprocess.run(
+        [sys.executable, str(EXAMPLE), "--env-config", '{"obs_type": "nope"}', "--iterations", "1"],
+        check=False, capture_output=True, text=True, timeout=120, env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
+    )
+    assert run.returncode != 0
+    assert run.stderr.strip().splitlines()[-1].startswith("error: invalid value nope for option `obs_type`")
+
+
+@pytest.mark.parametrize(
+    "config, message",
+    [
+        ({"num_envs": 2, "obs_type": "nope"}, "obs_type"),
+        ({"num_envs": 2, "no_such_option": 1}, "no_such_option"),
+        ({"no_such_option": 1}, "no_such_option"),
+        ({"num_envs": 2, "autoreset_mode": "same_step"}, "autoreset_mode"),
+        ({"num_envs": 2, "copy": False}, "copy"),
+    ],
+)
+def test_creator_rejects_bad_env_config_naming_the_option(config, message):
+    with pytest.raises(ValueError, match=message):
+        crl.env_creator(config)
+
+
+def test_runner_threads_follow_the_cpus_ray_gave_the_runner(monkeypatch):
+    monkeypatch.setattr(os, "sched_getaffinity", lambda _: set(range(8)), raising=False)
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    assert crl.env_creator({**FEATURES, "num_envs": 512}).unwrapped.num_threads == 2
+    monkeypatch.delenv("OMP_NUM_THREADS")
+    assert crl.env_creator({**FEATURES, "num_envs": 512}).unwrapped.num_threads == 8
+    assert crl.env_creator({**FEATURES, "num_envs": 512, "num_threads": 3}).unwrapped.num_threads == 3
+
+
+# Each runner built in this one process registers RLlib's env id again (Gymnasium warns about it).
+reregistering = pytest.mark.filterwarnings("ignore:.*Overriding environment rllib-single-agent-env-v0")
+
+
+@reregistering
+@pytest.mark.parametrize("mode", ["vector_entry_point", "sync"])
+def test_rllib_env_runners_seed_every_sub_env_differently(mode):
+    """RLlib's own runners (built here in-process, as Ray builds them remotely): runner w resets with seed + w,
+    which would give runner 1's env 1 and runner 2's env 0 the same game; here every seed differs."""
+    config = (
+        PPOConfig()
+        .environment(crl.ENV_NAME, env_config=FEATURES)
+        .env_runners(num_env_runners=3, num_envs_per_env_runner=4, gym_env_vectorize_mode=mode)
+        .debugging(seed=11)
+    )
+    seeds = []
+    for w in (1, 2, 3):
+        runner = SingleAgentEnvRunner(config=config, worker_index=w, num_workers=3)
+        episodes = runner.sample(num_timesteps=8, random_actions=True)
+        assert sum(e.env_steps() for e in episodes) == 8
+        if mode == "vector_entry_point":
+            assert isinstance(runner.env.unwrapped, chopperscape.VectorEnv)
+        seeds += crl.runner_seeds(runner)
+        runner.stop()
+    raw = [11 + w + i for w in (1, 2, 3) for i in range(4)]
+    assert len(set(raw)) < len(raw)  # what RLlib and Gymnasium alone would give
+    if mode == "vector_entry_point":
+        assert seeds == [(11 + w) * K + i for w in (1, 2, 3) for i in range(4)]
+    else:
+        assert seeds == [(11 + w + i) * K + w for w in (1, 2, 3) for i in range(4)]
+    assert len(set(seeds)) == 12
+
+
+@reregistering
+def test_float_pixels_feed_rllibs_default_cnn_with_grayscale_frames():
+    config = (
+        PPOConfig()
+        .environment(crl.ENV_NAME, env_config={"obs_type": "grayscale", "obs_size": [84, 84]})
+        .env_runners(num_env_runners=0, num_envs_per_env_runner=2, gym_env_vectorize_mode="vector_entry_point",
+                     env_to_module_connector=lambda env, spaces, device: crl.FloatPixels())
+    )
+    runner = SingleAgentEnvRunner(config=config, worker_index=0, num_workers=0)
+    episodes = runner.sample(num_timesteps=4)
+    assert sum(e.env_steps() for e in episodes) == 4
+    space = crl.FloatPixels().recompute_output_observation_space(runner.env.single_observation_space, None)
+    assert space.shape == (84, 84, 1) and space.dtype == np.float32
+    frame = runner.env.unwrapped.reset(seed=1)[0][0]
+    out = crl.FloatPixels().preprocess(frame, None)
+    assert out.shape == (84, 84, 1) and out.dtype == np.float32
+    np.testing.assert_allclose(out[..., 0], frame / 255.0, rtol=1e-6)
+    runner.stop()
+
+
+# --- a real Ray cluster on loopback ------------------------------------------------------------------------------
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _processes_mentioning(text: str) -> list[int]:
+    """PIDs whose command line contains `text` (the cluster's temp dir names only its own processes)."""
+    pids = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                cmdline = Path(f"/proc/{entry}/cmdline").read_bytes()
+            except OSError:
+                continue
+            if text.encode() in cmdline:
+                pids.append(int(entry))
+    return pids
+
+
+@pytest.fixture(scope="module")
+def ray_cluster():
+    """`ray start --head --block` on 127.0.0.1 with ports it picks, in its own temp dir, session and process group,
+    with its own auth token; stopped by signalling that group and the processes naming its temp dir, never by a
+    bare `ray stop` (which stops every Ray of this user on the machine)."""
+    ray_cli = Path(sys.executable).parent / "ray"
+    if not ray_cli.exists():
+        pytest.skip(f"the `ray` command is not installed beside {sys.executable}")
+    # Short: Ray's Unix socket paths under the temp dir must stay below 108 bytes.
+    temp = tempfile.mkdtemp(prefix="cs-ray-", dir="/tmp")
+    env = {
+        **os.environ,
+        "RAY_TMPDIR": temp,
+        "RAY_AUTH_MODE": "token",
+        "RAY_AUTH_TOKEN": secrets.token_hex(32),
+        "RAY_GRACEFUL_SHUTDOWN_DRAIN_TIMEOUT_S": "0",
+        "RAY_USAGE_STATS_ENABLED": "0",
+    }
+    port = _free_port()
+    args = [
+        str(ray_cli), "start", "--head", "--block", "--node-ip-address=127.0.0.1", f"--port={port}",
+        f"--temp-dir={temp}", "--include-dashboard=false", f"--dashboard-port={_free_port()}", "--num-cpus=2",
+        f"--object-store-memory={256 * 2**20}", "--disable-usage-stats",
+        f"--node-manager-port={_free_port()}", f"--object-manager-port={_free_port()}",
+        f"--dashboard-agent-listen-port={_free_port()}", f"--dashboard-agent-grpc-port={_free_port()}",
+        f"--runtime-env-agent-port={_free_port()}", f"--metrics-export-port={_free_port()}",
+    ]
+    log_path = Path(temp) / "ray-start.log"
+    with open(log_path, "w") as log:
+        head = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while "block forever" not in log_path.read_text():
+            if head.poll() is not None or time.monotonic() > deadline:
+                pytest.fail(f"ray start --head did not come up:\n{log_path.read_text()[-3000:]}")
+            time.sleep(0.5)
+        yield {"address": f"127.0.0.1:{port}", "env": env, "temp": temp, "head_pid": head.pid}
+    finally:
+        _stop_cluster(head, temp)
+
+
+def _stop_cluster(head: subprocess.Popen, temp: str) -> None:
+    if head.poll() is None:
+        head.send_signal(signal.SIGTERM)  # `ray start --block` stops the processes it started
+        try:
+            head.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            pass
+    try:
+        os.killpg(head.pid, signal.SIGKILL)  # anything of its process group still alive
+    except ProcessLookupError:
+        pass
+    head.wait()
+    for pid in _processes_mentioning(temp):  # workers that left the group
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    time.sleep(0.5)
+    left = _processes_mentioning(temp)
+    shutil.rmtree(temp, ignore_errors=True)
+    assert not left, f"Ray processes of the test cluster still running: {left}"
+
+
+def _train(cluster, out: Path, name: str, *extra: str) -> tuple[dict, list[dict]]:
+    csv_path, summary_path = out / f"{name}.csv", out / f"{name}.json"
+    cmd = [
+        sys.executable, str(EXAMPLE), "--address", cluster["address"], "--env-runners", "2",
+        "--envs-per-runner", "4", "--train-batch-size", "400", "--minibatch-size", "100", "--epochs", "1",
+        "--hidden", "16", "--seed", "3", "--env-config", '{"max_fuel": 40}', "--minutes", "5",
+        "--csv", str(csv_path), "--summary", str(summary_path), *extra,
+    ]
+    run = subprocess.run(cmd, check=False, env=cluster["env"], capture_output=True, text=True, timeout=420)
+    assert run.returncode == 0, f"{' '.join(cmd)} failed:\n{run.stdout[-3000:]}\n{run.stderr[-6000:]}"
+    with open(csv_path, newline="") as f:
+        reader = csv.DictReader(f)
+        assert reader.fieldnames == ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
+        rows = list(reader)
+    return json.loads(summary_path.read_text()), rows
+
+
+def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cluster, tmp_path):
+    summary, rows = _train(ray_cluster, tmp_path, "first", "--iterations", "2", "--checkpoint", str(tmp_path / "ck"))
+    assert len(rows) == 2 == summary["iterations"]
+    steps = [int(r["env_steps"]) for r in rows]
+    assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
+    # Both runners sampled, each its own process, none of them the driver.
+    per_runner = summary["steps_per_runner"]
+    assert sorted(per_runner) == ["1", "2"] and all(n > 0 for n in per_runner.values())
+    assert sum(per_runner.values()) == summary["env_steps"]
+    assert sorted(summary["episodes_per_runner"]) == ["1", "2"]  # max_fuel 40: episodes of 40 steps
+    pids = summary["pids_per_runner"]
+    assert len({pids["1"], pids["2"], summary["driver_pid"]}) == 3
+    assert float(rows[-1]["mean_length"]) == 40.0 and float(rows[-1]["mean_return"]) == 40.0
+    # Native batches, seeded (3 + w) * K + i: eight distinct games.
+    assert summary["seeds_per_runner"] == {str(w): [(3 + w) * K + i for i in range(4)] for w in (1, 2)}
+
+    restored, rows2 = _train(ray_cluster, tmp_path, "second", "--iterations", "1", "--python-envs",
+                             "--restore", str(tmp_path / "ck"))
+    assert restored["restored_weights_sha256"] == summary["weights_sha256"]
+    assert restored["restored_env_steps"] == summary["env_steps"]
+    assert int(rows2[0]["env_steps"]) >= summary["env_steps"] + 400  # the counters continue
+    assert sum(restored["steps_per_runner"].values()) == restored["env_steps"] - summary["env_steps"]
+    assert restored["weights_sha256"] != summary["weights_sha256"]  # and training goes on from there
+    seeds = [s for w in ("1", "2") for s in restored["seeds_per_runner"][w]]
+    assert len(set(seeds)) == 8 and restored["seeds_per_runner"]["1"][0] == (3 + 1) * K + 1
