@@ -2,8 +2,9 @@
 
     python -m chopperscape.evaluate MODEL --episodes 100 --seed 1000000
 
-`MODEL` is a file written by ``python -m chopperscape.train`` (``model.pt``) or a Stable-Baselines3 ``.zip`` (then
-give the env options it was trained with: ``--option obs_type='"features"'``). Episode ``k`` is played on seed
+`MODEL` is a file written by ``python -m chopperscape.train`` (``model.pt``), a Stable-Baselines3 ``.zip`` (then
+give the env options it was trained with: ``--option obs_type='"features"'``), or the name of a built-in pilot
+(``random``, ``heuristic``, ``noop``…, see ``chopperscape.pilots``), so that baselines come from the same seeds. Episode ``k`` is played on seed
 ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or to the 10,000-step truncation,
 with the greedy action (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
 
@@ -30,11 +31,12 @@ CHUNK = 128
 
 
 def play_episodes(
-    act: Callable[[np.ndarray], np.ndarray], episodes: int, seed: int, env_options: dict[str, Any],
+    act: Callable[[np.ndarray, VectorEnv], np.ndarray], episodes: int, seed: int, env_options: dict[str, Any],
     max_episode_steps: int | None = 10_000,
 ) -> list[dict[str, Any]]:
-    """Plays `episodes` episodes on seeds `seed, seed + 1, …` with `act(obs_batch) -> actions`; one dict each
-    (`seed`, `return`, `steps`, `cause`)."""
+    """Plays `episodes` episodes on seeds `seed, seed + 1, …` with `act(obs_batch, envs) -> actions` (`envs`, the
+    `VectorEnv` being played, is for pilots that read the game); one dict each (`seed`, `return`, `steps`,
+    `cause`)."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"invalid value {episodes!r} for `episodes`: allowed an integer >= 1")
     results: list[dict[str, Any]] = []
@@ -43,11 +45,13 @@ def play_episodes(
         envs = VectorEnv(n, num_threads=1, max_episode_steps=max_episode_steps, **env_options)
         try:
             obs, _ = envs.reset(seed=seed + first)
+            if hasattr(act, "start_chunk"):
+                act.start_chunk(n, seed + first)
             ret, steps = np.zeros(n, np.int64), np.zeros(n, np.int64)
             live = np.ones(n, bool)
             causes: list[str | None] = [None] * n
             while live.any():
-                obs, reward, term, trunc, info = envs.step(np.asarray(act(obs), dtype=np.int64))
+                obs, reward, term, trunc, info = envs.step(np.asarray(act(obs, envs), dtype=np.int64))
                 ret += np.where(live, reward, 0).astype(np.int64)
                 steps += live
                 ended = live & (term | trunc)
@@ -80,15 +84,38 @@ def summary(results: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+class _PilotPlayer:
+    """A built-in pilot over each chunk of environments: pilot `i` seeded as environment `i` (`S + i`)."""
+
+    def __init__(self, name: str):
+        self.name = name
+        self.pilot = None
+
+    def start_chunk(self, n: int, seed: int) -> None:
+        from .pilots import VectorPilot
+
+        self.pilot = VectorPilot(self.name, n, seed=seed)
+
+    def __call__(self, obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
+        return self.pilot.act(envs)
+
+
 def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, Any]):
-    """`(act, env_options)` for a model file: a recipe `model.pt` or a Stable-Baselines3 `.zip`."""
+    """`(act, env_options)` for a model file (a recipe `model.pt`, a Stable-Baselines3 `.zip`) or a pilot name."""
+    from .pilots import NAMES
+
+    if not path.exists() and str(path) in NAMES:
+        return _PilotPlayer(str(path)), {"obs_type": "features", **env_options}
     if not path.is_file():
-        raise ValueError(f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.train or an SB3 .zip)")
+        raise ValueError(
+            f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.train, an SB3 .zip, "
+            f"or a pilot name: {', '.join(NAMES)})"
+        )
     if path.suffix == ".zip":
         from stable_baselines3 import PPO
 
         model = PPO.load(path, device="cpu")
-        return (lambda obs: model.predict(obs, deterministic=not stochastic)[0]), env_options
+        return (lambda obs, envs: model.predict(obs, deterministic=not stochastic)[0]), env_options
     import torch
 
     from .train import Agent, ObsNormalizer, RunningMeanStd
@@ -112,7 +139,7 @@ def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
         norm.rms = RunningMeanStd.from_state(payload["obs_rms"])
     gen = torch.Generator().manual_seed(seed)
 
-    def act(obs: np.ndarray) -> np.ndarray:
+    def act(obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
         with torch.no_grad():
             logits = agent.actor(torch.from_numpy(norm(obs)))
             if stochastic:
@@ -125,7 +152,7 @@ def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m chopperscape.evaluate", description=__doc__.splitlines()[0])
-    p.add_argument("model", type=Path, help="model.pt from chopperscape.train, or an SB3 .zip")
+    p.add_argument("model", type=Path, help="model.pt from chopperscape.train, an SB3 .zip, or a pilot name")
     p.add_argument("--episodes", type=int, default=100, help="episodes to play (default 100)")
     p.add_argument("--seed", type=int, default=1_000_000, help="first seed (default 1000000, held out from training)")
     p.add_argument("--stochastic", action="store_true", help="sample actions instead of taking the greedy one")

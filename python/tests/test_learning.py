@@ -41,6 +41,18 @@ def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     assert all(e["steps"] <= 200 or e["return"] > 0 for e in second["per_episode"])
 
 
+def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
+    from chopperscape import evaluate, pilots
+
+    assert evaluate.main(["random", "--episodes", "3", "--seed", "4", "--per-episode",
+                          "--option", "max_fuel=300"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    expected = [(e["seed"], e["return"], e["steps"]) for e in
+                ({"seed": 4 + i, "return": r, "steps": s} for i, (r, s) in
+                 enumerate((ep["return"], ep["steps"]) for ep in pilots.episodes("random", 3, 4, max_fuel=300)))]
+    assert [(e["seed"], e["return"], e["steps"]) for e in out["per_episode"]] == expected
+
+
 def test_evaluate_names_a_bad_model_file(tmp_path, capsys):
     from chopperscape import evaluate
 
@@ -55,7 +67,7 @@ def test_evaluate_names_a_bad_model_file(tmp_path, capsys):
 def test_evaluation_episodes_replay_single_envs():
     from chopperscape.evaluate import play_episodes
 
-    results = play_episodes(lambda obs: np.full(len(obs), 4), 3, 5, dict(SHORT))
+    results = play_episodes(lambda obs, envs: np.full(len(obs), 4), 3, 5, dict(SHORT))
     for r in results:
         env = gym.make("ChopperScape-v0", **SHORT)
         env.reset(seed=r["seed"])
