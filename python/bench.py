@@ -5,7 +5,9 @@
 Prints one line per case: the single env (`features`, and `rgb` 600 × 800) through `gymnasium.make` (with its
 wrappers) and through the environment's own `step`; the native vector env (`features`, `grayscale` 84 × 84) at
 N = 64 and 1024 with 1 and 2 threads, copy-free (`copy=False`) and with fresh arrays (`copy=True`, the default);
-and Gymnasium's CartPole-v1 as a yardstick.
+SB3 `VecEnv`s (when stable-baselines3 is installed): the native adapter `chopperscape.sb3.ChopperScapeVecEnv`
+against SB3's own `make_vec_env` (a `DummyVecEnv` of `Monitor`-wrapped envs), at N = 8 and 64; and Gymnasium's
+CartPole-v1 as a yardstick.
 """
 
 from __future__ import annotations
@@ -75,6 +77,27 @@ def vector(num_envs: int, threads: int, copy: bool, **options):
     return step
 
 
+def sb3_vec(kind: str, num_envs: int):
+    if kind == "native":
+        from chopperscape.sb3 import ChopperScapeVecEnv
+
+        envs = ChopperScapeVecEnv(num_envs, seed=0, obs_type="features")
+    else:
+        from stable_baselines3.common.env_util import make_vec_env
+
+        envs = make_vec_env("ChopperScape-v0", n_envs=num_envs, seed=0, env_kwargs={"obs_type": "features"})
+    envs.reset()
+    batches = np.random.default_rng(0).integers(0, 5, (64, num_envs))
+    state = {"t": 0}
+
+    def step() -> int:
+        state["t"] = (state["t"] + 1) & 63
+        envs.step(batches[state["t"]])
+        return num_envs
+
+    return step
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=1.0, help="measuring time per case (default 1.0)")
@@ -95,6 +118,14 @@ def main() -> None:
                 for copy in [False, True]:
                     label = f"vector {name:<9} N={n:<4} T={threads} copy={copy!s:<5}"
                     cases.append((label, lambda n=n, t=threads, c=copy, o=options: vector(n, t, c, **o)))
+    try:
+        import stable_baselines3  # noqa: F401
+
+        for n in [8, 64]:
+            for kind in ["native", "make_vec_env"]:
+                cases.append((f"SB3 VecEnv {kind:<12} N={n}", lambda k=kind, n=n: sb3_vec(k, n)))
+    except ImportError:
+        print("# stable-baselines3 is not installed: no SB3 VecEnv cases")
     cases.append(("CartPole-v1 gymnasium.make", lambda: single(gym.make("CartPole-v1"), own=False)))
     cases.append(("CartPole-v1 env.step", lambda: single(gym.make("CartPole-v1"), own=True)))
     print(f"{'case':<44} {'steps/s':>14} {'steps/CPU-s':>14}")

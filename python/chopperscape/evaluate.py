@@ -178,7 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    out = {"model": str(a.model), "seed": a.seed, "greedy": not a.stochastic, **summary(results)}
+    out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
+    if not isinstance(act, _PilotPlayer):
+        out["greedy"] = not a.stochastic
+    out.update(summary(results))
     if a.per_episode:
         out["per_episode"] = results
     print(json.dumps(out))
