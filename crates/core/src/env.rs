@@ -92,10 +92,13 @@ impl ChopperScape {
     /// An environment with these options. Call [`Env::reset`] before stepping.
     ///
     /// # Errors
-    /// The first option out of range, named, with its allowed range.
+    /// The first option out of range, named, with its allowed range; options whose observation buffers would
+    /// take more than [`crate::limits::MAX_ENV_BYTES`] ([`ConfigError::TooLarge`]), or whose memory the system
+    /// refuses ([`ConfigError::OutOfMemory`]).
     pub fn new(config: Config) -> Result<ChopperScape, ConfigError> {
-        let observer = Observer::new(&config);
-        Ok(ChopperScape { game: Game::new(config)?, observer })
+        let game = Game::new(config)?;
+        let observer = Observer::new(game.config())?;
+        Ok(ChopperScape { game, observer })
     }
 
     /// The options.

@@ -34,6 +34,9 @@ mod _core {
         m.add("CAUSE_NAMES", chopperscape_vector::CAUSE_NAMES.to_vec())?;
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
+        m.add("MAX_ENV_BYTES", chopperscape::limits::MAX_ENV_BYTES)?;
+        m.add("MAX_BATCH_BYTES", chopperscape_vector::MAX_BATCH_BYTES)?;
+        m.add("MAX_THREADS", chopperscape_vector::MAX_THREADS)?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         Ok(())
     }
