@@ -250,18 +250,24 @@ def clone_state(env: gym.Env) -> bytes:
 
 def restore_state(env: gym.Env, state: bytes) -> None:
     """Restores `state` (from `clone_state`) into `env` and rewinds every wrapper that counts steps: each
-    `TimeLimit` then counts from the state's step, and `OrderEnforcing` allows stepping. Pass the env that
-    `gymnasium.make` returned (an unwrapped `ChopperScapeEnv` works too). `ValueError` for bytes that are not a
-    state of these options; nothing changes then."""
+    `TimeLimit` then counts from the state's step. Pass the env that `gymnasium.make` returned (an unwrapped
+    `ChopperScapeEnv` works too). `ValueError` for bytes that are not a state of these options; nothing changes
+    then. An env never reset is reset first through its wrappers (Gymnasium's order enforcing and env checker
+    want a reset before the first step); the restore then replaces everything that reset did."""
     base = env.unwrapped
     if not isinstance(base, ChopperScapeEnv):
         raise TypeError(f"restore_state needs a ChopperScape-v0 environment, got {type(base).__name__}")
+    base._core.restore(bytes(state))  # checks the bytes against these options before anything changes
+    layer = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, OrderEnforcing) and not layer.has_reset:
+            env.reset()
+            break
+        layer = layer.env
     base._restore(state)
     steps = base._core.elapsed_steps
     layer = env
     while isinstance(layer, gym.Wrapper):
         if isinstance(layer, TimeLimit):
             layer._elapsed_steps = steps
-        if isinstance(layer, OrderEnforcing):
-            layer._has_reset = True
         layer = layer.env

@@ -118,7 +118,7 @@ impl VectorEnv {
         config.validate()?;
         let needed = VectorEnv::batch_bytes(&config, num_envs, mode);
         let what = format!(
-            "a batch of {num_envs} environments (obs_type \"{}\", obs_size ({}, {}), frame_stack {})",
+            "a batch of num_envs={num_envs} environments (obs_type \"{}\", obs_size ({}, {}), frame_stack {})",
             config.obs_type.as_str(),
             config.obs_size.0,
             config.obs_size.1,

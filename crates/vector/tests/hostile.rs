@@ -13,7 +13,7 @@ fn batches_over_the_memory_budget_are_refused_without_allocating() {
         assert!(msg.contains(&n.to_string()) && msg.contains("budget of 16.0 GiB"), "{msg}");
     }
     let err = VectorEnv::new(Config::default(), 20_000, 1).unwrap_err().to_string();
-    assert!(err.contains("20000 environments") && err.contains("GiB"), "{err}");
+    assert!(err.contains("num_envs=20000 environments") && err.contains("GiB"), "{err}");
 }
 
 #[test]
