@@ -10,7 +10,10 @@
 //! (chopper, fuel, return, lives, steps, status, then each entity list as a `u32` count and its boxes), and the
 //! stacked observation (`u8` dtype tag, `u32` count, elements). Decoding checks the magic, the version, the
 //! length, the checksum and every value's range, so truncated, corrupted or foreign bytes give an error,
-//! never a panic or a wrong state.
+//! never a panic or a wrong state. Bytes with a correct checksum are not trusted either: the options are
+//! checked (memory budget included) and the frame stack's length computed from them before anything is
+//! allocated, and every value is checked against what the rules can reach (`reachable.rs`), so a decoded
+//! snapshot is always a state the game could be in.
 
 use crate::action::Action;
 use crate::config::{BirdFuelCollision, Config, ObsType};

@@ -30,7 +30,9 @@ pub(crate) fn snapshot_error(e: SnapshotError) -> PyErr {
 /// A refused batch call as a Python exception.
 pub(crate) fn batch_error(e: BatchError) -> PyErr {
     match e {
-        BatchError::NotReset | BatchError::ThreadPool { .. } => PyRuntimeError::new_err(e.to_string()),
+        BatchError::NotReset | BatchError::EnvState { .. } | BatchError::ThreadPool { .. } => {
+            PyRuntimeError::new_err(e.to_string())
+        }
         _ => PyValueError::new_err(e.to_string()),
     }
 }

@@ -198,7 +198,7 @@ fn count(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
     match value.extract::<usize>() {
         Ok(n) if !value.is_instance_of::<pyo3::types::PyBool>() => Ok(n),
         _ => Err(PyValueError::new_err(format!(
-            "invalid value {} for option `{name}`: allowed an integer >= 1",
+            "invalid value {} for option `{name}`: allowed an integer >= 1 (that fits the memory budget)",
             value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
         ))),
     }
