@@ -124,6 +124,9 @@ fn entities_off_their_paths_or_out_of_order_are_refused() {
     assert!(corrupted(&tamper(&bytes, |p| bird_x(p, last))).contains("order"));
     let alien_age = BIRDS + 4 + 8 * w.birds.len() + 4 + 8 * w.fuel_tanks.len() + 4 + 8;
     assert!(corrupted(&tamper(&bytes, |p| put(p, alien_age, &7u32.to_le_bytes()))).contains("alien"));
+    // Far outside the band, where `x + w` would overflow an i32 (found by the fuzzer).
+    let far = tamper(&bytes, |p| put(p, 96, &(i32::MAX - 10).to_le_bytes()));
+    assert!(corrupted(&far).contains("outside the flight band"), "{}", corrupted(&far));
     let huge_count = tamper(&bytes, |p| put(p, BIRDS, &10_000u32.to_le_bytes()));
     assert!(corrupted(&huge_count).contains("at most"));
 }
