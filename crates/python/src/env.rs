@@ -2,7 +2,7 @@
 
 use chopperscape::consts::{HEIGHT, WIDTH};
 use chopperscape::{ChopperScape, Env, Info, Snapshot};
-use numpy::{PyArray3, PyArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
@@ -93,10 +93,10 @@ impl PyEnv {
     }
 
     /// The full 600 × 800 × 3 `uint8` frame of the current state, HUD included, whatever the observation.
-    fn render<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    fn render<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
         let py = slf.py();
         let this = slf.try_borrow().map_err(in_use)?;
-        let frame = PyArray3::<u8>::zeros(py, [HEIGHT as usize, WIDTH as usize, 3], false);
+        let frame = crate::obs::zeros::<u8>(py, &[HEIGHT as usize, WIDTH as usize, 3])?;
         // SAFETY: `frame` was just created and is not shared yet.
         let rgb = unsafe { frame.as_slice_mut() }.expect("a fresh array is contiguous");
         let env = &this.env;

@@ -1,9 +1,10 @@
 //! `chopperscape._core.VectorEnv`: a batch of environments stepped by one call with the GIL released,
 //! written into numpy arrays. The Gymnasium class in `chopperscape/vector.py` wraps it.
 
+use chopperscape::consts::{HEIGHT, WIDTH};
 use chopperscape::{Dtype, ObsBufMut, Snapshot};
 use chopperscape_vector::{AutoresetMode, BatchMut, VectorEnv};
-use numpy::{PyArray1, PyArray3, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
@@ -262,11 +263,11 @@ impl PyVectorEnv {
     }
 
     /// The full 600 × 800 × 3 frame of environment `i`.
-    fn render<'py>(slf: &Bound<'py, Self>, i: usize) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    fn render<'py>(slf: &Bound<'py, Self>, i: usize) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
         let py = slf.py();
         let this = slf.try_borrow().map_err(in_use)?;
         let env = this.env(i)?;
-        let frame = PyArray3::<u8>::zeros(py, [600, 800, 3], false);
+        let frame = crate::obs::zeros::<u8>(py, &[HEIGHT as usize, WIDTH as usize, 3])?;
         // SAFETY: `frame` was just created and is not shared yet.
         let rgb = unsafe { frame.as_slice_mut() }.expect("a fresh array is contiguous");
         py.detach(|| env.render_into(rgb)).map_err(env_error)?;
