@@ -93,7 +93,7 @@ mod tests {
     #[test]
     fn the_default_env_takes_two_rgb_frames() {
         assert_eq!(env_bytes(&Config::default()), 2 * 600 * 800 * 3);
-        assert_eq!(env_bytes(&Config::features()), 34 * 4);
+        assert_eq!(env_bytes(&Config::features()), FEATURES_LEN as u64 * 4);
     }
 
     #[test]
