@@ -235,4 +235,6 @@ class VectorEnv(gym.vector.VectorEnv):
 
     def env_state(self, i: int) -> bytes:
         """Environment `i`'s whole state as bytes: `ChopperScapeEnv.restore_state` reads them."""
-        return self._core.snapshot(i)
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or not 0 <= i < self.num_envs:
+            raise IndexError(f"environment {i!r} does not exist: allowed 0..={self.num_envs - 1}")
+        return self._core.snapshot(int(i))

@@ -197,6 +197,13 @@ def test_without_max_episode_steps_a_step_count_of_2_32_is_not_a_truncation():
     assert envs._core.state()[1][0][2] == 2**32 - 1
 
 
+def test_env_state_of_an_env_that_does_not_exist_names_the_range():
+    envs = VectorEnv(2, **SHORT)
+    for i in (-1, 2, 2**70, 1.0):
+        with pytest.raises(IndexError, match=r"allowed 0\.\.=1"):
+            envs.env_state(i)
+
+
 # --- Python API consistency -------------------------------------------------------------------------------
 
 
