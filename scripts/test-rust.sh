@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Formatting, lints, and the Rust tests of every crate (unit, property, golden and integration tests).
+# Formatting, lints, the Rust tests of every crate (unit, property, golden and integration tests), and a short
+# run of every fuzz target where a nightly toolchain exists (scripts/fuzz-smoke.sh).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 cd "$ROOT"
@@ -15,4 +16,6 @@ else
   grep -E '^test result:' "$log" | grep -v ' 0 passed; 0 failed; 0 ignored; 0 measured' || true
 fi
 rm -f "$log"
-exit "$status"
+[ "$status" -ne 0 ] && exit "$status"
+# A short fuzz run of every target (where nightly exists; skipped with a message otherwise).
+bash "$(dirname "$0")/fuzz-smoke.sh"

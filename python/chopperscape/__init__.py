@@ -12,11 +12,20 @@ from __future__ import annotations
 from gymnasium.envs.registration import register, registry
 
 from . import _core
-from .env import ChopperScapeEnv
+from .env import ChopperScapeEnv, clone_state, restore_state
 from .vector import VectorEnv
 from . import pilots
 
-__all__ = ["ChopperScapeEnv", "VectorEnv", "pilots", "ACTION_MEANINGS", "OPTION_NAMES", "__version__"]
+__all__ = [
+    "ChopperScapeEnv",
+    "VectorEnv",
+    "clone_state",
+    "restore_state",
+    "pilots",
+    "ACTION_MEANINGS",
+    "OPTION_NAMES",
+    "__version__",
+]
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
@@ -24,7 +33,7 @@ OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_st
 if "ChopperScape-v0" not in registry:
     register(
         id="ChopperScape-v0",
-        entry_point="chopperscape.env:ChopperScapeEnv",
+        entry_point="chopperscape.env:registered",
         vector_entry_point="chopperscape.vector:VectorEnv",
         max_episode_steps=10_000,
     )

@@ -11,6 +11,12 @@ CAUSE_NAMES: list[str]
 SNAPSHOT_VERSION: int
 RENDER_FPS: int
 PILOT_NAMES: list[str]
+#: The most memory one environment's observation buffers may take (bytes); options over it raise ValueError.
+MAX_ENV_BYTES: int
+#: The most memory one VectorEnv may take (bytes); batches over it raise ValueError.
+MAX_BATCH_BYTES: int
+#: The most worker threads a VectorEnv may ask for.
+MAX_THREADS: int
 __version__: str
 
 Info = dict[str, Any]
@@ -28,9 +34,11 @@ class Env:
     @property
     def obs_dtype(self) -> str: ...
     @property
-    def obs_low(self) -> npt.NDArray[np.float32]: ...
+    def obs_bounds(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """One period of the bounds: one value each when uniform, else repeated over the flat observation."""
     @property
-    def obs_high(self) -> npt.NDArray[np.float32]: ...
+    def elapsed_steps(self) -> int:
+        """Steps taken in the current episode."""
     def snapshot(self) -> bytes: ...
     def restore(self, data: bytes) -> None: ...
     @staticmethod
@@ -50,12 +58,12 @@ BatchOutputs = tuple[
 
 class VectorEnv:
     """`num_envs` environments stepped together with the GIL released; environment i of a batch reset with
-    seed s is seeded s + i."""
+    seed s is seeded s + i. With copy=False every call returns the same read-only views of the output arrays."""
 
     def __init__(
         self,
         num_envs: int,
-        num_threads: int = 1,
+        num_threads: Optional[int] = None,
         options: Optional[dict[str, Any]] = None,
         same_step: bool = False,
         copy: bool = True,
@@ -77,9 +85,7 @@ class VectorEnv:
     @property
     def obs_dtype(self) -> str: ...
     @property
-    def obs_low(self) -> npt.NDArray[np.float32]: ...
-    @property
-    def obs_high(self) -> npt.NDArray[np.float32]: ...
+    def obs_bounds(self) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
     @property
     def max_fuel(self) -> int: ...
     @property

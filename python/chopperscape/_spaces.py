@@ -1,23 +1,94 @@
-"""Gymnasium spaces built from what the Rust core declares."""
+"""Gymnasium spaces built from what the Rust core declares, and the argument rules both environments share."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
+_U64 = 0xFFFF_FFFF_FFFF_FFFF
+
+
+class BroadcastBox(spaces.Box):
+    """A `gymnasium.spaces.Box` whose bounds repeat: one value for pixel observations, one features vector per
+    stacked frame, and the same bounds for every environment of a batch.
+
+    `low`, `high`, `bounded_below` and `bounded_above` are read-only broadcast views of one row of bounds, so
+    the space costs no memory per element: a plain `Box` holds four arrays the size of an observation (of the
+    whole batch, once batched), 368 MB for 64 rgb environments. It is a `Box` in every other way (equality,
+    `contains`, `sample`, pickling, `isinstance`); `gymnasium.vector.utils.batch_space` of it is a plain `Box`.
+    """
+
+    def __init__(self, low: Any, high: Any, shape: tuple[int, ...], dtype: Any, seed: Any = None):
+        row_low, row_high = np.asarray(low, dtype=dtype), np.asarray(high, dtype=dtype)
+        super().__init__(low=row_low.copy(), high=row_high.copy(), dtype=dtype, seed=seed)
+        self._row = (row_low, row_high)
+        self._shape = tuple(int(d) for d in shape)
+        for name in ("low", "high", "bounded_below", "bounded_above"):
+            setattr(self, name, np.broadcast_to(getattr(self, name), self._shape))
+
+    def __reduce__(self):
+        return (_rebuild_box, (*self._row, self._shape, self.dtype, self._np_random))
+
+
+def _rebuild_box(low: Any, high: Any, shape: tuple[int, ...], dtype: Any, np_random: Any) -> BroadcastBox:
+    box = BroadcastBox(low, high, shape, dtype)
+    if np_random is not None:
+        box._np_random = np_random
+    return box
+
+
+def _bounds_row(core) -> tuple[np.ndarray, np.ndarray, tuple[int, ...], np.dtype]:
+    """The core's bounds as the row `BroadcastBox` repeats: a scalar, or the flat features bounds."""
+    shape = tuple(core.obs_shape)
+    low, high = core.obs_bounds
+    if len(low) == 1:
+        return low.reshape(()), high.reshape(()), shape, np.dtype(core.obs_dtype)
+    # One features vector's bounds, once per stacked frame: a few thousand values at most.
+    reps = int(np.prod(shape)) // len(low)
+    return np.tile(low, reps).reshape(shape), np.tile(high, reps).reshape(shape), shape, np.dtype(core.obs_dtype)
+
 
 def observation_box(core) -> spaces.Box:
-    """The observation space of one environment: `Box` with the core's shape, dtype and bounds."""
-    shape = tuple(core.obs_shape)
-    dtype = np.dtype(core.obs_dtype)
-    low, high = core.obs_low, core.obs_high
+    """The observation space of one environment: a `Box` with the core's shape, dtype and bounds."""
+    low, high, shape, dtype = _bounds_row(core)
     if dtype == np.uint8:
-        return spaces.Box(low=0, high=255, shape=shape, dtype=np.uint8)
-    if np.all(low == low[0]) and np.all(high == high[0]):
-        return spaces.Box(low=float(low[0]), high=float(high[0]), shape=shape, dtype=np.float32)
-    return spaces.Box(low=low.reshape(shape), high=high.reshape(shape), dtype=np.float32)
+        low, high = np.asarray(0.0), np.asarray(255.0)
+    return BroadcastBox(low, high, shape, dtype)
 
 
-def core_seed(seed: int) -> int:
-    """A Gymnasium seed as the core's `u64` seed: the same number for every seed below 2**64."""
-    return int(seed) & 0xFFFF_FFFF_FFFF_FFFF
+def batched_box(single: BroadcastBox, n: int) -> BroadcastBox:
+    """`single` stacked `n` times on a new first axis, still without bounds per element."""
+    low, high = single._row
+    return BroadcastBox(low, high, (n, *single.shape), single.dtype)
+
+
+def core_seed(seed: Any, what: str = "seed") -> int:
+    """A Gymnasium seed as the core's `u64` seed: a non-negative integer (numpy's too), reduced modulo 2**64.
+
+    The one seed rule of `ChopperScapeEnv.reset` and `VectorEnv.reset` (a single seed or each one of a list).
+    """
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(
+            f"invalid {what} {seed!r}: allowed a non-negative integer (seeds of 2**64 and above are reduced "
+            "modulo 2**64), or None"
+        )
+    return int(seed) & _U64
+
+
+def check_reset_options(options: Any) -> None:
+    """The one rule for `reset(options=...)` of both environments: ChopperScape's reset takes no options."""
+    if options:
+        names = sorted(options) if isinstance(options, dict) else options
+        raise ValueError(
+            f"reset options {names!r} are not supported: ChopperScape's reset takes no options "
+            "(a partial reset with options['reset_mask'] is not supported either)"
+        )
+
+
+def check_bool(option: str, value: Any) -> bool:
+    """A bool option (`copy`, `hud`, ...): `True` or `False` (numpy's too), never a string or a number."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"invalid value {value!r} for option `{option}`: allowed True or False")
+    return bool(value)

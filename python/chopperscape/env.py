@@ -9,8 +9,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from gymnasium.wrappers import OrderEnforcing, TimeLimit
+
 from . import _core
-from ._spaces import core_seed, observation_box
+from ._spaces import check_reset_options, core_seed, observation_box
 
 #: `render_mode="human"` draws with pygame; it is declared only where pygame is installed, so that
 #: Gymnasium's checker (which tries every declared mode) passes everywhere.
@@ -102,6 +104,14 @@ class ChopperScapeEnv(gym.Env):
     `reset()` continues the stream; the first `reset()` without any seed draws one from `np_random`, which
     Gymnasium seeds from OS entropy.
 
+    ## Saving and restoring a state
+    `chopperscape.clone_state(env)` returns the whole game state as bytes; `chopperscape.restore_state(env, state)`
+    puts the game back in it *and* rewinds the wrappers that count steps: the `TimeLimit` that `gymnasium.make`
+    adds counts from the restored state's step, so truncation comes exactly when it would have. Pass the env
+    `gymnasium.make` returned. `env.unwrapped.restore_state(state)` cannot reach the wrappers, so on an
+    environment made by `gymnasium.make` it raises `RuntimeError` pointing here (on a `ChopperScapeEnv` you
+    built yourself, it restores).
+
     ## Version History
     - v0: the tutorial's game with its contradictions resolved as SPEC.md states.
     """
@@ -130,17 +140,23 @@ class ChopperScapeEnv(gym.Env):
         self.observation_space = observation_box(self._core)
         self._stream_started = False
         self._window = None
+        #: Set by the registered entry point: `gymnasium.make` wraps this env in a `TimeLimit`.
+        self._made_by_gymnasium = False
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Starts an episode. `seed` reseeds; no seed continues the stream (see Seeding). `options` is unused."""
-        super().reset(seed=seed)
+        """Starts an episode. `seed` reseeds; no seed continues the stream (see Seeding). `options` must be empty:
+        ChopperScape's reset takes none (`ValueError` otherwise, as `VectorEnv.reset`)."""
+        check_reset_options(options)
         if seed is not None:
             core = core_seed(seed)
+            super().reset(seed=int(seed))
         elif not self._stream_started:
+            super().reset()
             core = int(self.np_random.integers(0, 2**63))
         else:
+            super().reset()
             core = None
         result = self._core.reset(core)
         self._stream_started = True
@@ -194,7 +210,19 @@ class ChopperScapeEnv(gym.Env):
 
     def restore_state(self, state: bytes) -> None:
         """Restores a state from `clone_state()`; `ValueError` for bytes that are not a snapshot of this
-        environment's options. The environment then continues exactly as it would have from that state."""
+        environment's options. The environment then continues exactly as it would have from that state.
+
+        On an environment made by `gymnasium.make` this raises `RuntimeError`: the `TimeLimit` wrapper's step
+        counter would not be rewound. Use `chopperscape.restore_state(env, state)` there (see the class docs)."""
+        if self._made_by_gymnasium:
+            raise RuntimeError(
+                "restore_state on the unwrapped env would leave the TimeLimit wrapper that gymnasium.make added "
+                "counting from the wrong step: call chopperscape.restore_state(env, state) with the env "
+                "gymnasium.make returned"
+            )
+        self._restore(state)
+
+    def _restore(self, state: bytes) -> None:
         self._core.restore(bytes(state))
         self._stream_started = True
 
@@ -202,3 +230,44 @@ class ChopperScapeEnv(gym.Env):
         state = self.__dict__.copy()
         state["_window"] = None
         return state
+
+
+def registered(**kwargs: Any) -> ChopperScapeEnv:
+    """The entry point of `ChopperScape-v0`: a `ChopperScapeEnv` that knows `gymnasium.make` wraps it."""
+    env = ChopperScapeEnv(**kwargs)
+    env._made_by_gymnasium = True
+    return env
+
+
+def clone_state(env: gym.Env) -> bytes:
+    """The whole game state of `env` (a `ChopperScapeEnv`, wrapped or not) as bytes; the step count since the
+    last reset is part of it."""
+    base = env.unwrapped
+    if not isinstance(base, ChopperScapeEnv):
+        raise TypeError(f"clone_state needs a ChopperScape-v0 environment, got {type(base).__name__}")
+    return base.clone_state()
+
+
+def restore_state(env: gym.Env, state: bytes) -> None:
+    """Restores `state` (from `clone_state`) into `env` and rewinds every wrapper that counts steps: each
+    `TimeLimit` then counts from the state's step. Pass the env that `gymnasium.make` returned (an unwrapped
+    `ChopperScapeEnv` works too). `ValueError` for bytes that are not a state of these options; nothing changes
+    then. An env never reset is reset first through its wrappers (Gymnasium's order enforcing and env checker
+    want a reset before the first step); the restore then replaces everything that reset did."""
+    base = env.unwrapped
+    if not isinstance(base, ChopperScapeEnv):
+        raise TypeError(f"restore_state needs a ChopperScape-v0 environment, got {type(base).__name__}")
+    base._core.restore(bytes(state))  # checks the bytes against these options before anything changes
+    layer = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, OrderEnforcing) and not layer.has_reset:
+            env.reset()
+            break
+        layer = layer.env
+    base._restore(state)
+    steps = base._core.elapsed_steps
+    layer = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, TimeLimit):
+            layer._elapsed_steps = steps
+        layer = layer.env

@@ -12,7 +12,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from . import _core
-from ._spaces import core_seed, observation_box
+from ._spaces import batched_box, check_bool, check_reset_options, core_seed, observation_box
 
 _CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
 
@@ -36,7 +36,7 @@ class VectorEnv(gym.vector.VectorEnv):
     | Argument | Default | Meaning |
     |----------|---------|---------|
     | `num_threads` | 1 | worker threads (results do not depend on it); more pay only for large batches on idle cores (see `default_threads`) |
-    | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, overwritten by the next `step`/`reset` (copy what you keep, and do not write into them: pixel observations are drawn incrementally onto the previous frame) |
+    | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, read-only (`writeable=False`), overwritten by the next `step`/`reset` (copy what you keep: pixel observations are drawn incrementally onto the previous frame). A bool |
     | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
     | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |
     | `render_mode` | `None` | `"rgb_array"`: `render()` returns a tuple of 600 × 800 × 3 frames |
@@ -81,6 +81,7 @@ class VectorEnv(gym.vector.VectorEnv):
             raise ValueError(
                 "invalid value for option `autoreset_mode`: allowed AutoresetMode.NEXT_STEP or AutoresetMode.SAME_STEP"
             )
+        copy = check_bool("copy", copy)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"invalid value {render_mode!r} for option `render_mode`: allowed None, 'rgb_array'")
         if max_episode_steps is not None and (
@@ -108,7 +109,7 @@ class VectorEnv(gym.vector.VectorEnv):
         self.metadata = {**type(self).metadata, "autoreset_mode": autoreset_mode}
         self.max_episode_steps = max_episode_steps
         self.single_observation_space = observation_box(self._core)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.observation_space = batched_box(self.single_observation_space, self.num_envs)
         self.single_action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._stream_started = False
@@ -122,22 +123,19 @@ class VectorEnv(gym.vector.VectorEnv):
         """Resets every environment. `seed=s` seeds environment `i` with `s + i`; a list gives each its own seed
         (`None` continues that one's stream); no seed continues every stream (the first time, a seed is drawn
         from `np_random`, itself seeded from OS entropy)."""
-        if options:
-            raise ValueError(
-                f"reset options {sorted(options)} are not supported: ChopperScape's reset takes no options "
-                "(a partial reset with options['reset_mask'] is not supported either)"
-            )
+        check_reset_options(options)
         if isinstance(seed, (list, tuple)):
             if len(seed) != self.num_envs:
                 raise ValueError(
                     f"If seeds are passed as a list the length must match num_envs={self.num_envs} but got "
                     f"length={len(seed)}."
                 )
-            out = self._core.reset_seeds([None if s is None else core_seed(s) for s in seed])
+            seeds = [None if s is None else core_seed(s, f"seed at index {i}") for i, s in enumerate(seed)]
+            out = self._core.reset_seeds(seeds)
         else:
             if seed is not None:
-                super().reset(seed=seed)
                 core = core_seed(seed)
+                super().reset(seed=int(seed))
             elif not self._stream_started:
                 core = int(self.np_random.integers(0, 2**63))
             else:
@@ -238,4 +236,6 @@ class VectorEnv(gym.vector.VectorEnv):
 
     def env_state(self, i: int) -> bytes:
         """Environment `i`'s whole state as bytes: `ChopperScapeEnv.restore_state` reads them."""
-        return self._core.snapshot(i)
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or not 0 <= i < self.num_envs:
+            raise IndexError(f"environment {i!r} does not exist: allowed 0..={self.num_envs - 1}")
+        return self._core.snapshot(int(i))

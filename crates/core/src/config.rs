@@ -147,6 +147,9 @@ impl Default for Config {
     }
 }
 
+/// What `max_episode_steps` allows, in words.
+const MAX_EPISODE_STEPS_ALLOWED: &str = "an integer in 1..=4294967295, or none to never truncate";
+
 fn out_of_range(option: &'static str, value: impl ToString, allowed: &'static str) -> ConfigError {
     ConfigError::OutOfRange { option, value: value.to_string(), allowed }
 }
@@ -189,9 +192,44 @@ impl Config {
         check_prob("fuel_prob", self.fuel_prob)?;
         check_range("max_fuel", self.max_fuel, 1, 1_000_000, "an integer in 1..=1000000")?;
         if self.max_episode_steps == Some(0) {
-            return Err(out_of_range("max_episode_steps", 0, "a positive integer, or none to never truncate"));
+            return Err(out_of_range("max_episode_steps", 0, MAX_EPISODE_STEPS_ALLOWED));
         }
-        Ok(())
+        crate::limits::check_budget(
+            format!(
+                "one environment's observation buffers (obs_type \"{}\", obs_size ({h}, {w}), frame_stack {})",
+                self.obs_type.as_str(),
+                self.frame_stack
+            ),
+            crate::limits::env_bytes(self),
+            crate::limits::MAX_ENV_BYTES,
+            "choose a smaller obs_size or frame_stack, or obs_type \"grayscale\" or \"features\"",
+        )
+    }
+
+    /// The options that differ between `self` and `other`, each as `name self_value != other_value`, in
+    /// [`OPTION_NAMES`] order: what a refused restore names.
+    pub fn differences(&self, other: &Config) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut cmp = |name: &str, a: String, b: String| {
+            if a != b {
+                out.push(format!("{name} {a} != {b}"));
+            }
+        };
+        let steps = |m: Option<u32>| m.map_or_else(|| "none".to_string(), |m| m.to_string());
+        cmp("obs_type", self.obs_type.as_str().into(), other.obs_type.as_str().into());
+        cmp("obs_size", format!("{:?}", self.obs_size), format!("{:?}", other.obs_size));
+        cmp("frame_stack", self.frame_stack.to_string(), other.frame_stack.to_string());
+        cmp("hud", self.hud.to_string(), other.hud.to_string());
+        cmp("lives", self.lives.to_string(), other.lives.to_string());
+        cmp("bird_fuel_collision", self.bird_fuel_collision.as_str().into(), other.bird_fuel_collision.as_str().into());
+        cmp("alien_prob", self.alien_prob.to_string(), other.alien_prob.to_string());
+        cmp("frame_skip", self.frame_skip.to_string(), other.frame_skip.to_string());
+        cmp("sticky_prob", self.sticky_prob.to_string(), other.sticky_prob.to_string());
+        cmp("bird_prob", self.bird_prob.to_string(), other.bird_prob.to_string());
+        cmp("fuel_prob", self.fuel_prob.to_string(), other.fuel_prob.to_string());
+        cmp("max_fuel", self.max_fuel.to_string(), other.max_fuel.to_string());
+        cmp("max_episode_steps", steps(self.max_episode_steps), steps(other.max_episode_steps));
+        out
     }
 
     /// Sets one option from its SPEC name and a textual value (as the command line and the web page give them),
@@ -225,7 +263,7 @@ impl Config {
                 next.max_episode_steps = if v.eq_ignore_ascii_case("none") {
                     None
                 } else {
-                    Some(parse("max_episode_steps", v, "a positive integer, or none to never truncate")?)
+                    Some(parse("max_episode_steps", v, MAX_EPISODE_STEPS_ALLOWED)?)
                 }
             }
             _ => return Err(ConfigError::Unknown { name: name.to_string() }),
@@ -264,7 +302,7 @@ mod tests {
             ("obs_type", "rgba", "grayscale"),
             ("bird_fuel_collision", "explode", "destroy"),
             ("hud", "maybe", "true or false"),
-            ("max_episode_steps", "0", "positive"),
+            ("max_episode_steps", "0", "1..=4294967295"),
         ];
         for (name, value, allowed) in cases {
             let mut c = Config::default();
@@ -273,6 +311,30 @@ mod tests {
             assert!(err.contains(allowed), "{err}");
             assert_eq!(c, Config::default(), "a rejected option changed the config");
         }
+    }
+
+    #[test]
+    fn options_over_the_memory_budget_are_refused_with_the_size() {
+        let mut c = Config::default();
+        c.set("obs_size", "4096x4096").unwrap();
+        let err = c.set("frame_stack", "64").unwrap_err().to_string();
+        assert!(err.contains("frame_stack 64") && err.contains("GiB") && err.contains("budget of 4.0 GiB"), "{err}");
+        assert_eq!(c.frame_stack, 1, "a refused option changes nothing");
+        c.set("frame_stack", "8").unwrap();
+    }
+
+    #[test]
+    fn max_episode_steps_beyond_u32_names_the_range() {
+        let err = Config::default().set("max_episode_steps", "4294967296").unwrap_err().to_string();
+        assert!(err.contains("max_episode_steps") && err.contains("1..=4294967295"), "{err}");
+    }
+
+    #[test]
+    fn differences_name_only_the_options_that_differ() {
+        let a = Config::default();
+        let b = Config { lives: 3, max_episode_steps: None, ..Config::default() };
+        assert_eq!(a.differences(&b), ["lives 1 != 3", "max_episode_steps 10000 != none"]);
+        assert!(a.differences(&a).is_empty());
     }
 
     #[test]

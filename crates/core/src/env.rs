@@ -92,10 +92,16 @@ impl ChopperScape {
     /// An environment with these options. Call [`Env::reset`] before stepping.
     ///
     /// # Errors
-    /// The first option out of range, named, with its allowed range.
+    /// The first option out of range, named, with its allowed range; options whose observation buffers would
+    /// take more than [`crate::limits::MAX_ENV_BYTES`] ([`ConfigError::TooLarge`]), or whose memory the system
+    /// refuses ([`ConfigError::OutOfMemory`]).
     pub fn new(config: Config) -> Result<ChopperScape, ConfigError> {
-        let observer = Observer::new(&config);
-        Ok(ChopperScape { game: Game::new(config)?, observer })
+        let game = Game::new(config)?;
+        // Everything the observation buffers take, asked of the system at once: a refusal is an error here,
+        // never an abort in the middle of building them (or of the caller's first observation).
+        crate::limits::probe(crate::limits::env_bytes(game.config()), "one environment's observation buffers")?;
+        let observer = Observer::new(game.config())?;
+        Ok(ChopperScape { game, observer })
     }
 
     /// The options.

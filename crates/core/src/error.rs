@@ -16,6 +16,33 @@ pub enum ConfigError {
         /// The allowed range or set, in words.
         allowed: &'static str,
     },
+    /// Options whose buffers would take more memory than the budget ([`crate::limits`]).
+    #[error(
+        "{what} would take {} of memory, over the budget of {}: {hint}",
+        crate::limits::format_bytes(*needed),
+        crate::limits::format_bytes(*budget)
+    )]
+    TooLarge {
+        /// What would be allocated, with the options that size it.
+        what: String,
+        /// Bytes it would take.
+        needed: u64,
+        /// Bytes allowed.
+        budget: u64,
+        /// What to change.
+        hint: &'static str,
+    },
+    /// The system refused memory for a buffer within the budget (for example under `ulimit -v`).
+    #[error(
+        "could not allocate {} for {what}: the system refused the memory (is a memory limit such as ulimit -v set?)",
+        crate::limits::format_bytes(*needed)
+    )]
+    OutOfMemory {
+        /// What was being allocated.
+        what: String,
+        /// Bytes asked for.
+        needed: u64,
+    },
     /// An option name that does not exist.
     #[error("unknown option `{name}`: allowed options are {}", crate::config::OPTION_NAMES.join(", "))]
     Unknown {
@@ -48,6 +75,9 @@ pub enum SnapshotError {
     /// The snapshot was taken from an environment with other options.
     #[error("snapshot was taken with other options than this environment's: {0}")]
     ConfigMismatch(String),
+    /// A valid snapshot that does not fit where it is restored (a batch slot's pending reset or step count).
+    #[error("state does not fit: {0}")]
+    Inconsistent(String),
 }
 
 /// Everything the environment can refuse.

@@ -63,9 +63,13 @@ impl Rect {
         (ax - bx).abs() <= self.w + other.w && (ay - by).abs() <= self.h + other.h
     }
 
-    /// Whether the box lies inside the flight band.
+    /// Whether the box lies inside the flight band. Written so that no position overflows, however far out
+    /// (a decoded snapshot may hold any `i32`).
     pub fn in_band(&self) -> bool {
-        self.x >= X_MIN && self.x + self.w <= X_MAX && self.y >= Y_MIN && self.y + self.h <= Y_MAX
+        self.x >= X_MIN
+            && i64::from(self.x) + i64::from(self.w) <= i64::from(X_MAX)
+            && self.y >= Y_MIN
+            && i64::from(self.y) + i64::from(self.h) <= i64::from(Y_MAX)
     }
 }
 
@@ -120,6 +124,13 @@ mod tests {
         let further = Rect::placed(100, 165, BIRD_SIZE);
         assert!(chopper.collides(&below));
         assert!(!chopper.collides(&further));
+    }
+
+    #[test]
+    fn boxes_far_outside_are_outside_without_overflow() {
+        for (x, y) in [(i32::MAX, 100), (i32::MAX - 10, 100), (100, i32::MAX), (i32::MIN, 100), (100, i32::MIN)] {
+            assert!(!Rect { x, y, w: 64, h: 64 }.in_band(), "({x}, {y})");
+        }
     }
 
     #[test]

@@ -13,8 +13,9 @@
 //! frame from one shared renderer, built once.
 
 use crate::config::{Config, ObsType};
-use crate::error::Error;
+use crate::error::{ConfigError, Error};
 use crate::features::{self, FEATURES_LEN};
+use crate::limits::try_filled;
 use crate::observation::{ObsBufMut, ObsData};
 use crate::render::{PixelFormat, Renderer};
 use crate::spaces::{BoxSpace, Dtype};
@@ -54,37 +55,46 @@ enum Target {
 }
 
 impl Observer {
-    pub(crate) fn new(config: &Config) -> Observer {
+    /// The observation pipeline of `config` (already validated, so within the memory budget).
+    ///
+    /// # Errors
+    /// [`ConfigError::OutOfMemory`] when the system refuses the buffers' memory.
+    pub(crate) fn new(config: &Config) -> Result<Observer, ConfigError> {
         let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
         let k = config.frame_stack as usize;
         let format = if config.obs_type == ObsType::Grayscale { PixelFormat::Gray } else { PixelFormat::Rgb };
+        let (single_len, channels) = single_len(config);
+        let canvas_len = match config.obs_type {
+            ObsType::Features => 0,
+            ObsType::Rgb | ObsType::RgbFloat => h * w * 3,
+            ObsType::Grayscale => h * w,
+        };
+        let canvas = try_filled(canvas_len, 255, "the observation canvas")?;
         let renderer = config
             .obs_type
             .is_pixels()
             .then(|| Renderer::with_format(config.obs_size.0, config.obs_size.1, config.hud, format));
-        let (single_len, channels) = match config.obs_type {
-            ObsType::Features => (FEATURES_LEN, FEATURES_LEN),
-            ObsType::Rgb | ObsType::RgbFloat => (h * w * 3, 3),
-            ObsType::Grayscale => (h * w, 1),
-        };
-        let canvas = renderer.as_ref().map_or_else(Vec::new, |r| vec![255; r.frame_len()]);
         let space = match config.obs_type {
-            ObsType::Features => {
-                let (lo, hi) = (features::low(), features::high());
-                BoxSpace { shape: vec![FEATURES_LEN * k], dtype: Dtype::F32, low: lo.repeat(k), high: hi.repeat(k) }
-            }
+            ObsType::Features => BoxSpace::repeated(
+                vec![FEATURES_LEN * k],
+                Dtype::F32,
+                features::low().to_vec(),
+                features::high().to_vec(),
+            ),
             ObsType::Rgb => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::U8, 0.0, 255.0),
             ObsType::RgbFloat => BoxSpace::uniform(vec![h, w, 3 * k], Dtype::F32, 0.0, 1.0),
             ObsType::Grayscale if k == 1 => BoxSpace::uniform(vec![h, w], Dtype::U8, 0.0, 255.0),
             ObsType::Grayscale => BoxSpace::uniform(vec![h, w, k], Dtype::U8, 0.0, 255.0),
         };
         let (n_stacked, n_newest) = if k > 1 { (single_len * k, single_len) } else { (0, 0) };
-        let zeros = |n: usize| match space.dtype {
-            Dtype::U8 => ObsData::U8(vec![0; n]),
-            Dtype::F32 => ObsData::F32(vec![0.0; n]),
+        let zeros = |n: usize, what: &str| -> Result<ObsData, ConfigError> {
+            Ok(match space.dtype {
+                Dtype::U8 => ObsData::U8(try_filled(n, 0, what)?),
+                Dtype::F32 => ObsData::F32(try_filled(n, 0.0, what)?),
+            })
         };
-        let (stacked, newest) = (zeros(n_stacked), zeros(n_newest));
-        Observer {
+        let (stacked, newest) = (zeros(n_stacked, "the frame stack")?, zeros(n_newest, "the frame stack")?);
+        Ok(Observer {
             obs_type: config.obs_type,
             k,
             channels,
@@ -95,7 +105,7 @@ impl Observer {
             space,
             stale: true,
             target: Target::Canvas { copied_to: 0 },
-        }
+        })
     }
 
     pub(crate) fn space(&self) -> &BoxSpace {
@@ -224,6 +234,22 @@ impl Observer {
             (t, o) => unreachable!("observation type {t:?} with a {:?} buffer passed check()", o.dtype()),
         }
     }
+}
+
+/// Elements of one unstacked observation of `config`, and elements per pixel (34 for features, whose vector
+/// stacks as one "pixel").
+fn single_len(config: &Config) -> (usize, usize) {
+    let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
+    match config.obs_type {
+        ObsType::Features => (FEATURES_LEN, FEATURES_LEN),
+        ObsType::Rgb | ObsType::RgbFloat => (h * w * 3, 3),
+        ObsType::Grayscale => (h * w, 1),
+    }
+}
+
+/// Elements of the frame stack an observer of `config` keeps (0 when `frame_stack = 1`): what a snapshot holds.
+pub(crate) fn stacked_len(config: &Config) -> usize {
+    if config.frame_stack > 1 { single_len(config).0 * config.frame_stack as usize } else { 0 }
 }
 
 /// BT.601 luma, in integers: `(299·R + 587·G + 114·B + 500) / 1000`.

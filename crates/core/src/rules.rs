@@ -144,7 +144,8 @@ impl Game {
             }
         }
         let w = &mut self.world;
-        w.steps += 1;
+        // Saturates: with no step limit an episode may outlast the counter, which then stays at u32::MAX.
+        w.steps = w.steps.saturating_add(1);
         if w.status == Status::Running && self.config.max_episode_steps == Some(w.steps) {
             w.status = Status::Truncated;
         }
@@ -224,7 +225,7 @@ impl Game {
         if *fuel_left == 0 && *status == Status::Running {
             *status = Status::Terminated(Cause::Fuel);
         }
-        *episode_return += i64::from(reward);
+        *episode_return = episode_return.saturating_add(i64::from(reward));
         reward
     }
 }

@@ -10,7 +10,10 @@
 //! (chopper, fuel, return, lives, steps, status, then each entity list as a `u32` count and its boxes), and the
 //! stacked observation (`u8` dtype tag, `u32` count, elements). Decoding checks the magic, the version, the
 //! length, the checksum and every value's range, so truncated, corrupted or foreign bytes give an error,
-//! never a panic or a wrong state.
+//! never a panic or a wrong state. Bytes with a correct checksum are not trusted either: the options are
+//! checked (memory budget included) and the frame stack's length computed from them before anything is
+//! allocated, and every value is checked against what the rules can reach (`reachable.rs`), so a decoded
+//! snapshot is always a state the game could be in.
 
 use crate::action::Action;
 use crate::config::{BirdFuelCollision, Config, ObsType};
@@ -19,6 +22,8 @@ use crate::env::ChopperScape;
 use crate::error::{Error, SnapshotError};
 use crate::geometry::Rect;
 use crate::observation::ObsData;
+use crate::observe::stacked_len;
+use crate::reachable::{MAX_BIRDS, MAX_FUEL_TANKS, MAX_MISSILES, check_stacked, check_world};
 use crate::rng::Rng;
 use crate::rules::Game;
 use crate::world::{Alien, Cause, Status, World};
@@ -148,15 +153,11 @@ impl ChopperScape {
     /// exactly as the one the snapshot was taken from.
     ///
     /// # Errors
-    /// [`SnapshotError::ConfigMismatch`] when the options differ; nothing changes then.
+    /// [`SnapshotError::ConfigMismatch`] naming the options that differ; nothing changes then.
     pub fn restore(&mut self, snapshot: &Snapshot) -> Result<(), Error> {
         if snapshot.config() != self.config() {
-            return Err(SnapshotError::ConfigMismatch(format!(
-                "snapshot {:?}, environment {:?}",
-                snapshot.config(),
-                self.config()
-            ))
-            .into());
+            let differ = snapshot.config().differences(self.config()).join(", ");
+            return Err(SnapshotError::ConfigMismatch(format!("{differ} (snapshot != environment)")).into());
         }
         let (game, observer) = self.parts_mut();
         game.clone_from(&snapshot.game);
@@ -165,10 +166,14 @@ impl ChopperScape {
     }
 
     /// A new environment in the state of the snapshot, with its options.
-    pub fn from_snapshot(snapshot: &Snapshot) -> ChopperScape {
-        let mut env = ChopperScape::new(snapshot.config().clone()).expect("a decoded snapshot's options are valid");
-        env.restore(snapshot).expect("same options");
-        env
+    ///
+    /// # Errors
+    /// [`crate::ConfigError::OutOfMemory`] when the system refuses the memory of the observation buffers (the
+    /// decoder has checked the options, memory budget included).
+    pub fn from_snapshot(snapshot: &Snapshot) -> Result<ChopperScape, Error> {
+        let mut env = ChopperScape::new(snapshot.config().clone())?;
+        env.restore(snapshot)?;
+        Ok(env)
     }
 }
 
@@ -223,20 +228,14 @@ fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
         4 => Status::Truncated,
         _ => return Err(bad("status")),
     };
-    if fuel_left > config.max_fuel || lives_left > config.lives {
-        return Err(bad("fuel or lives above the options' maximum"));
-    }
-    if config.max_episode_steps.is_some_and(|m| steps > m) {
-        return Err(bad("steps beyond max_episode_steps"));
-    }
-    let birds = r.rects(BIRD_SIZE, "birds")?;
-    let fuel_tanks = r.rects(FUEL_TANK_SIZE, "fuel tanks")?;
-    let n = r.count(12, "aliens")?;
+    let birds = r.rects(BIRD_SIZE, MAX_BIRDS, "birds")?;
+    let fuel_tanks = r.rects(FUEL_TANK_SIZE, MAX_FUEL_TANKS, "fuel tanks")?;
+    let n = r.count(12, MAX_BIRDS, "aliens")?;
     let mut aliens = Vec::with_capacity(n);
     for _ in 0..n {
         aliens.push(Alien { body: r.rect(ALIEN_SIZE, "alien")?, age: r.u32("alien age")? });
     }
-    let missiles = r.rects(MISSILE_SIZE, "missiles")?;
+    let missiles = r.rects(MISSILE_SIZE, MAX_MISSILES, "missiles")?;
     let world = World {
         chopper,
         birds,
@@ -249,30 +248,29 @@ fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
         steps,
         status,
     };
-    let game = Game::from_parts(config, world, rng, prev_action);
+    check_world(&config, &world, prev_action).map_err(SnapshotError::Corrupted)?;
 
+    // The frame stack's length follows from the options: checked before anything is allocated for it.
+    let expected = stacked_len(&config);
     let dtype = r.u8("observation type")?;
-    let n = r.count(if dtype == 1 { 4 } else { 1 }, "stacked observation")?;
-    let stacked = match dtype {
-        0 => ObsData::U8(r.take(n, "stacked observation")?.to_vec()),
-        1 => ObsData::F32(
-            r.take(n * 4, "stacked observation")?
-                .chunks_exact(4)
-                .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
-                .collect(),
-        ),
-        _ => return Err(bad("observation type")),
-    };
-    let probe = ChopperScape::new(game.config.clone()).map_err(|e| SnapshotError::Corrupted(e.to_string()))?;
-    let expected = probe.snapshot().stacked;
-    let fits = match (&stacked, &expected) {
-        (ObsData::U8(a), ObsData::U8(b)) => a.len() == b.len(),
-        (ObsData::F32(a), ObsData::F32(b)) => a.len() == b.len(),
-        _ => false,
-    };
-    if !fits {
-        return Err(bad("stacked observation does not match the options"));
+    let f32s = matches!(config.obs_type, ObsType::RgbFloat | ObsType::Features);
+    if dtype != u8::from(f32s) {
+        return Err(bad("observation type does not match the options"));
     }
+    let n = r.u32("stacked observation")? as usize;
+    if n != expected {
+        return Err(SnapshotError::Corrupted(format!(
+            "stacked observation holds {n} values: the options give {expected}"
+        )));
+    }
+    let stacked = if f32s {
+        let bytes = r.take(n.checked_mul(4).ok_or_else(|| bad("stacked observation"))?, "stacked observation")?;
+        ObsData::F32(bytes.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes"))).collect())
+    } else {
+        ObsData::U8(r.take(n, "stacked observation")?.to_vec())
+    };
+    check_stacked(&config, status, &stacked).map_err(SnapshotError::Corrupted)?;
+    let game = Game::from_parts(config, world, rng, prev_action);
     if !r.b.is_empty() {
         return Err(bad("trailing bytes in the payload"));
     }
@@ -342,8 +340,12 @@ impl<'a> Reader<'a> {
         self.array(what).map(f64::from_le_bytes)
     }
     /// A count of items of `item_len` bytes each, refused when the rest of the bytes cannot hold them.
-    fn count(&mut self, item_len: usize, what: &'static str) -> Result<usize, SnapshotError> {
+    /// At most `max` of them (what the rules can reach).
+    fn count(&mut self, item_len: usize, max: usize, what: &'static str) -> Result<usize, SnapshotError> {
         let n = self.u32(what)? as usize;
+        if n > max {
+            return Err(SnapshotError::Corrupted(format!("{n} {what}: at most {max} can be on screen")));
+        }
         if n.saturating_mul(item_len) > self.b.len() {
             return Err(SnapshotError::Truncated(what));
         }
@@ -360,8 +362,8 @@ impl<'a> Reader<'a> {
             Err(SnapshotError::Corrupted(format!("{what} at ({x}, {y}) is outside the flight band")))
         }
     }
-    fn rects(&mut self, size: (i32, i32), what: &'static str) -> Result<Vec<Rect>, SnapshotError> {
-        let n = self.count(8, what)?;
+    fn rects(&mut self, size: (i32, i32), max: usize, what: &'static str) -> Result<Vec<Rect>, SnapshotError> {
+        let n = self.count(8, max, what)?;
         (0..n).map(|_| self.rect(size, what)).collect()
     }
 }

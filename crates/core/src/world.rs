@@ -92,7 +92,8 @@ pub struct World {
     pub episode_return: i64,
     /// Lives left, in `[0, lives]`.
     pub lives: u32,
-    /// Agent steps taken in this episode (one `step` call counts once, whatever the frame skip).
+    /// Agent steps taken in this episode (one `step` call counts once, whatever the frame skip). Saturates at
+    /// `u32::MAX` (an episode with no step limit may run longer; it is never truncated for that).
     pub steps: u32,
     /// Where the episode stands.
     pub status: Status,

@@ -109,7 +109,7 @@ fn snapshot_bytes_round_trip_for_every_observation_type() {
         let snap = played_snapshot(config.clone());
         let bytes = snap.to_bytes();
         assert_eq!(Snapshot::from_bytes(&bytes).unwrap(), snap, "{obs_type:?}");
-        let mut a = ChopperScape::from_snapshot(&snap);
+        let mut a = ChopperScape::from_snapshot(&snap).unwrap();
         let mut b = ChopperScape::new(config).unwrap();
         b.restore(&Snapshot::from_bytes(&bytes).unwrap()).unwrap();
         for action in [0, 3, 3, 1, 2, 4] {
@@ -169,6 +169,6 @@ fn restoring_a_snapshot_with_other_options_is_refused_and_changes_nothing() {
 fn a_snapshot_taken_before_the_first_reset_round_trips() {
     let env = features_env();
     let snap = Snapshot::from_bytes(&env.snapshot().to_bytes()).unwrap();
-    let mut restored = ChopperScape::from_snapshot(&snap);
+    let mut restored = ChopperScape::from_snapshot(&snap).unwrap();
     assert_eq!(restored.step(0).unwrap_err(), Error::NotReset);
 }

@@ -2,14 +2,14 @@
 
 use chopperscape::consts::{HEIGHT, WIDTH};
 use chopperscape::{ChopperScape, Env, Info, Snapshot};
-use numpy::{PyArray1, PyArray3, PyArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 use pyo3::{IntoPyObjectExt, intern};
 
-use crate::errors::{env_error, snapshot_error};
-use crate::obs::ObsArray;
+use crate::errors::{env_error, in_use, snapshot_error};
+use crate::obs::{BoundsArrays, ObsArray, bounds};
 use crate::options::config_from;
 
 /// One ChopperScape environment, as the core runs it. `options` are the keyword options of SPEC.md
@@ -55,24 +55,30 @@ impl PyEnv {
 
     /// Starts an episode: `seed` reseeds the generator, `None` continues its stream. Returns `(obs, info)`.
     #[pyo3(signature = (seed = None))]
-    fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
-        let obs = ObsArray::for_space(py, self.env.observation_space());
+    fn reset<'py>(slf: &Bound<'py, Self>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        let mut this = slf.try_borrow_mut().map_err(in_use)?;
+        let this = &mut *this;
+        let obs = ObsArray::for_space(py, this.env.observation_space())?;
         // SAFETY: `obs` was just created and is not shared yet.
         let buf = unsafe { obs.as_buf_mut() };
-        let env = &mut self.env;
-        let info = if self.pixels { py.detach(|| env.reset_into(seed, buf)) } else { env.reset_into(seed, buf) }
+        let env = &mut this.env;
+        let info = if this.pixels { py.detach(|| env.reset_into(seed, buf)) } else { env.reset_into(seed, buf) }
             .map_err(env_error)?;
         PyTuple::new(py, [obs.into_any(), info_dict(py, &info)?.into_any()])
     }
 
     /// Advances one step. Returns `(obs, reward: float, terminated: bool, truncated: bool, info)`.
-    fn step<'py>(&mut self, py: Python<'py>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
+    fn step<'py>(slf: &Bound<'py, Self>, action: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
         let action = extract_action(action)?;
-        let obs = ObsArray::for_space(py, self.env.observation_space());
+        let mut this = slf.try_borrow_mut().map_err(in_use)?;
+        let this = &mut *this;
+        let obs = ObsArray::for_space(py, this.env.observation_space())?;
         // SAFETY: `obs` was just created and is not shared yet.
         let buf = unsafe { obs.as_buf_mut() };
-        let env = &mut self.env;
-        let t = if self.pixels { py.detach(|| env.step_into(action, buf)) } else { env.step_into(action, buf) }
+        let env = &mut this.env;
+        let t = if this.pixels { py.detach(|| env.step_into(action, buf)) } else { env.step_into(action, buf) }
             .map_err(env_error)?;
         PyTuple::new(
             py,
@@ -87,67 +93,71 @@ impl PyEnv {
     }
 
     /// The full 600 × 800 × 3 `uint8` frame of the current state, HUD included, whatever the observation.
-    fn render<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        let frame = PyArray3::<u8>::zeros(py, [HEIGHT as usize, WIDTH as usize, 3], false);
+    fn render<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
+        let py = slf.py();
+        let this = slf.try_borrow().map_err(in_use)?;
+        let frame = crate::obs::zeros::<u8>(py, &[HEIGHT as usize, WIDTH as usize, 3])?;
         // SAFETY: `frame` was just created and is not shared yet.
         let rgb = unsafe { frame.as_slice_mut() }.expect("a fresh array is contiguous");
-        let env = &self.env;
+        let env = &this.env;
         py.detach(|| env.render_into(rgb)).map_err(env_error)?;
         Ok(frame)
     }
 
     /// The info of the current state.
-    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        info_dict(py, &self.env.info())
+    fn info<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
+        info_dict(slf.py(), &slf.try_borrow().map_err(in_use)?.env.info())
+    }
+
+    /// Steps taken in the current episode (what a `TimeLimit` wrapper counts).
+    #[getter]
+    fn elapsed_steps(slf: &Bound<'_, Self>) -> PyResult<u32> {
+        Ok(slf.try_borrow().map_err(in_use)?.env.world().steps)
     }
 
     /// Shape of one observation.
     #[getter]
-    fn obs_shape(&self) -> Vec<usize> {
-        self.env.observation_space().shape.clone()
+    fn obs_shape(slf: &Bound<'_, Self>) -> PyResult<Vec<usize>> {
+        Ok(slf.try_borrow().map_err(in_use)?.env.observation_space().shape.clone())
     }
 
     /// numpy name of the observation's element type: `"uint8"` or `"float32"`.
     #[getter]
-    fn obs_dtype(&self) -> &'static str {
-        self.env.observation_space().dtype.as_str()
+    fn obs_dtype(slf: &Bound<'_, Self>) -> PyResult<&'static str> {
+        Ok(slf.try_borrow().map_err(in_use)?.env.observation_space().dtype.as_str())
     }
 
-    /// Lower bound of each observation element, flat.
+    /// One period of the observation's bounds, `(low, high)`, as `float32` arrays: one value each when every
+    /// element shares them (pixels), else the per-element bounds of one features vector, repeated over the
+    /// frame stack. Nothing is stored per element.
     #[getter]
-    fn obs_low<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
-        PyArray1::from_slice(py, &self.env.observation_space().low)
-    }
-
-    /// Upper bound of each observation element, flat.
-    #[getter]
-    fn obs_high<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
-        PyArray1::from_slice(py, &self.env.observation_space().high)
+    fn obs_bounds<'py>(slf: &Bound<'py, Self>) -> PyResult<BoundsArrays<'py>> {
+        Ok(bounds(slf.py(), slf.try_borrow().map_err(in_use)?.env.observation_space()))
     }
 
     /// The whole state (options included) as versioned bytes.
-    fn snapshot<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.env.snapshot().to_bytes())
+    fn snapshot<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyBytes>> {
+        Ok(PyBytes::new(slf.py(), &slf.try_borrow().map_err(in_use)?.env.snapshot().to_bytes()))
     }
 
     /// Restores a state from [`PyEnv::snapshot`] bytes taken with the same options.
-    fn restore(&mut self, data: &[u8]) -> PyResult<()> {
+    fn restore(slf: &Bound<'_, Self>, data: &[u8]) -> PyResult<()> {
         let snapshot = Snapshot::from_bytes(data).map_err(snapshot_error)?;
-        self.env.restore(&snapshot).map_err(env_error)
+        slf.try_borrow_mut().map_err(in_use)?.env.restore(&snapshot).map_err(env_error)
     }
 
     /// An environment rebuilt from snapshot bytes alone (what unpickling does).
     #[staticmethod]
     fn from_snapshot(data: &[u8]) -> PyResult<PyEnv> {
         let snapshot = Snapshot::from_bytes(data).map_err(snapshot_error)?;
-        let env = ChopperScape::from_snapshot(&snapshot);
+        let env = ChopperScape::from_snapshot(&snapshot).map_err(env_error)?;
         Ok(PyEnv { pixels: env.config().obs_type.is_pixels(), env })
     }
 
     /// Pickles as its snapshot bytes.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let ctor = py.get_type::<PyEnv>().getattr(intern!(py, "from_snapshot"))?;
-        Ok((ctor, (self.snapshot(py),)))
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let ctor = slf.py().get_type::<PyEnv>().getattr(intern!(slf.py(), "from_snapshot"))?;
+        Ok((ctor, (PyEnv::snapshot(slf)?,)))
     }
 }
 

@@ -30,7 +30,18 @@ pub(crate) fn snapshot_error(e: SnapshotError) -> PyErr {
 /// A refused batch call as a Python exception.
 pub(crate) fn batch_error(e: BatchError) -> PyErr {
     match e {
-        BatchError::NotReset | BatchError::ThreadPool { .. } => PyRuntimeError::new_err(e.to_string()),
+        BatchError::NotReset | BatchError::EnvState { .. } | BatchError::ThreadPool { .. } => {
+            PyRuntimeError::new_err(e.to_string())
+        }
         _ => PyValueError::new_err(e.to_string()),
     }
+}
+
+/// What a second thread gets while another one is inside a call on the same environment (instead of
+/// PyO3's bare "Already borrowed").
+pub(crate) fn in_use(_: impl std::fmt::Display) -> PyErr {
+    PyRuntimeError::new_err(
+        "this environment is in use by another thread: an env cannot be used from two threads at once \
+         (give each thread its own env, or guard it with a lock)",
+    )
 }

@@ -38,6 +38,9 @@ mod _core {
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
         m.add("PILOT_NAMES", chopperscape::policy::NAMES.to_vec())?;
+        m.add("MAX_ENV_BYTES", chopperscape::limits::MAX_ENV_BYTES)?;
+        m.add("MAX_BATCH_BYTES", chopperscape_vector::MAX_BATCH_BYTES)?;
+        m.add("MAX_THREADS", chopperscape_vector::MAX_THREADS)?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         Ok(())
     }

@@ -1,8 +1,42 @@
 //! numpy arrays for observations, allocated by the binding and written by the core.
 
-use chopperscape::{BoxSpace, Dtype, ObsBufMut};
-use numpy::{IxDyn, PyArrayDyn, PyArrayMethods};
+use chopperscape::{Bounds, BoxSpace, Dtype, ObsBufMut};
+use numpy::npyffi::PY_ARRAY_API;
+use numpy::{Element, PyArray1, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+
+/// A zeroed C-contiguous array of `shape`, or Python's `MemoryError` when numpy cannot allocate it (where
+/// `PyArrayDyn::zeros` would panic).
+pub(crate) fn zeros<'py, T: Element>(py: Python<'py>, shape: &[usize]) -> PyResult<Bound<'py, PyArrayDyn<T>>> {
+    let mut dims: Vec<numpy::npyffi::npy_intp> = shape.iter().map(|&d| d as numpy::npyffi::npy_intp).collect();
+    // SAFETY: `dims` holds `shape.len()` dimensions and outlives the call; `PyArray_Zeros` steals the dtype
+    // reference `into_dtype_ptr` gives it, and returns a new reference or NULL with an exception set.
+    let array = unsafe {
+        let ptr = PY_ARRAY_API.PyArray_Zeros(
+            py,
+            dims.len() as std::os::raw::c_int,
+            dims.as_mut_ptr(),
+            T::get_dtype(py).into_dtype_ptr(),
+            0,
+        );
+        Bound::from_owned_ptr_or_err(py, ptr)?
+    };
+    let array = array.cast_into::<PyArrayDyn<T>>().map_err(PyErr::from)?;
+    debug_assert!(array.is_c_contiguous() && array.dtype().is_equiv_to(&T::get_dtype(py)));
+    Ok(array)
+}
+
+/// `(low, high)` arrays of an observation space's bounds.
+pub(crate) type BoundsArrays<'py> = (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>);
+
+/// One period of the space's bounds as two `float32` arrays (one value each when the bounds are uniform):
+/// element `i` of an observation has the bounds `low[i % len]`, `high[i % len]`.
+pub(crate) fn bounds<'py>(py: Python<'py>, space: &BoxSpace) -> BoundsArrays<'py> {
+    match &space.bounds {
+        Bounds::Uniform { low, high } => (PyArray1::from_slice(py, &[*low]), PyArray1::from_slice(py, &[*high])),
+        Bounds::Repeated { low, high } => (PyArray1::from_slice(py, low), PyArray1::from_slice(py, high)),
+    }
+}
 
 /// A numpy observation array of the space's element type.
 pub(crate) enum ObsArray<'py> {
@@ -14,15 +48,21 @@ pub(crate) enum ObsArray<'py> {
 
 impl<'py> ObsArray<'py> {
     /// A zeroed array of this shape and element type.
-    pub(crate) fn zeros(py: Python<'py>, shape: &[usize], dtype: Dtype) -> ObsArray<'py> {
-        match dtype {
-            Dtype::U8 => ObsArray::U8(PyArrayDyn::zeros(py, IxDyn(shape), false)),
-            Dtype::F32 => ObsArray::F32(PyArrayDyn::zeros(py, IxDyn(shape), false)),
-        }
+    ///
+    /// # Errors
+    /// `MemoryError` when numpy cannot allocate it.
+    pub(crate) fn zeros(py: Python<'py>, shape: &[usize], dtype: Dtype) -> PyResult<ObsArray<'py>> {
+        Ok(match dtype {
+            Dtype::U8 => ObsArray::U8(zeros(py, shape)?),
+            Dtype::F32 => ObsArray::F32(zeros(py, shape)?),
+        })
     }
 
     /// A zeroed array for one observation of `space`.
-    pub(crate) fn for_space(py: Python<'py>, space: &BoxSpace) -> ObsArray<'py> {
+    ///
+    /// # Errors
+    /// `MemoryError` when numpy cannot allocate it.
+    pub(crate) fn for_space(py: Python<'py>, space: &BoxSpace) -> PyResult<ObsArray<'py>> {
         ObsArray::zeros(py, &space.shape, space.dtype)
     }
 

@@ -1,15 +1,16 @@
 //! `chopperscape._core.VectorEnv`: a batch of environments stepped by one call with the GIL released,
 //! written into numpy arrays. The Gymnasium class in `chopperscape/vector.py` wraps it.
 
+use chopperscape::consts::{HEIGHT, WIDTH};
 use chopperscape::{Dtype, ObsBufMut, Snapshot};
 use chopperscape_vector::{AutoresetMode, BatchMut, VectorEnv};
-use numpy::{PyArray1, PyArray3, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 
-use crate::errors::{batch_error, env_error};
-use crate::obs::ObsArray;
+use crate::errors::{batch_error, env_error, in_use};
+use crate::obs::{BoundsArrays, ObsArray, bounds};
 use crate::options::config_from;
 
 /// The output arrays of a batch.
@@ -25,6 +26,9 @@ struct Arrays {
     /// `int64`; the batch writes `uint32` into `lives32`.
     lives: Py<PyArray1<i64>>,
     cause: Py<PyArray1<u8>>,
+    /// With `copy=False`: read-only views of the arrays above, in the order `run` returns them, handed out
+    /// instead of the arrays themselves (the batch keeps writing into them).
+    views: Option<Vec<Py<PyAny>>>,
 }
 
 enum ObsPy {
@@ -39,11 +43,11 @@ enum ObsRw<'py> {
 }
 
 impl ObsPy {
-    fn new(py: Python<'_>, shape: &[usize], dtype: Dtype) -> ObsPy {
-        match ObsArray::zeros(py, shape, dtype) {
+    fn new(py: Python<'_>, shape: &[usize], dtype: Dtype) -> PyResult<ObsPy> {
+        Ok(match ObsArray::zeros(py, shape, dtype)? {
             ObsArray::U8(a) => ObsPy::U8(a.unbind()),
             ObsArray::F32(a) => ObsPy::F32(a.unbind()),
-        }
+        })
     }
 
     fn bind<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
@@ -99,41 +103,57 @@ pub(crate) struct PyVectorEnv {
 }
 
 impl PyVectorEnv {
-    fn new_arrays(&self, py: Python<'_>) -> Arrays {
+    fn new_arrays(&self, py: Python<'_>) -> PyResult<Arrays> {
         let n = self.inner.num_envs();
         let space = self.inner.single_observation_space();
         let mut shape = vec![n];
         shape.extend_from_slice(&space.shape);
         let same_step = self.inner.autoreset_mode() == AutoresetMode::SameStep;
-        Arrays {
-            obs: ObsPy::new(py, &shape, space.dtype),
-            final_obs: same_step.then(|| ObsPy::new(py, &shape, space.dtype)),
+        let mut arrays = Arrays {
+            obs: ObsPy::new(py, &shape, space.dtype)?,
+            final_obs: same_step.then(|| ObsPy::new(py, &shape, space.dtype)).transpose()?,
             rewards: PyArray1::zeros(py, n, false).unbind(),
             terminated: PyArray1::zeros(py, n, false).unbind(),
             truncated: PyArray1::zeros(py, n, false).unbind(),
             fuel: PyArray1::zeros(py, n, false).unbind(),
             lives: PyArray1::zeros(py, n, false).unbind(),
             cause: PyArray1::zeros(py, n, false).unbind(),
+            views: None,
+        };
+        if !self.copy {
+            let read_only = |a: Bound<'_, PyAny>| -> PyResult<Py<PyAny>> {
+                if a.is_none() {
+                    return Ok(a.unbind());
+                }
+                let view = a.call_method0("view")?;
+                view.getattr("flags")?.setattr("writeable", false)?;
+                Ok(view.unbind())
+            };
+            arrays.views = Some(arrays.all(py).into_iter().map(read_only).collect::<PyResult<_>>()?);
         }
+        Ok(arrays)
     }
 
     /// Runs `f` on the output arrays (fresh ones with `copy`) with the GIL released; returns the arrays as
-    /// `(obs, rewards, terminated, truncated, fuel, lives, cause, final_obs | None)`.
+    /// `(obs, rewards, terminated, truncated, fuel, lives, cause, final_obs | None)`, read-only views of them
+    /// without `copy`.
     fn run<'py>(
-        &mut self,
-        py: Python<'py>,
+        slf: &Bound<'py, Self>,
         f: impl FnOnce(&mut VectorEnv, BatchMut<'_>) -> PyResult<()> + Send,
     ) -> PyResult<Bound<'py, PyTuple>> {
-        if self.copy || self.arrays.is_none() {
-            self.arrays = Some(self.new_arrays(py));
+        let py = slf.py();
+        let mut this = slf.try_borrow_mut().map_err(in_use)?;
+        let this = &mut *this;
+        if this.copy || this.arrays.is_none() {
+            this.arrays = Some(this.new_arrays(py)?);
         }
-        let a = self.arrays.as_ref().expect("arrays were just made");
+        let a = this.arrays.as_ref().expect("arrays were just made");
         let mut obs = a.obs.borrow(py)?;
         let mut final_obs = a.final_obs.as_ref().map(|f| f.borrow(py)).transpose()?;
         let (mut rewards, mut terminated, mut truncated) =
             (rw(&a.rewards, py)?, rw(&a.terminated, py)?, rw(&a.truncated, py)?);
         let (mut fuel, mut lives, mut cause) = (rw(&a.fuel, py)?, rw(&a.lives, py)?, rw(&a.cause, py)?);
-        let (rewards32, fuel32, lives32) = (&mut self.rewards32, &mut self.fuel32, &mut self.lives32);
+        let (rewards32, fuel32, lives32) = (&mut this.rewards32, &mut this.fuel32, &mut this.lives32);
         let contiguous = "the binding's own arrays are contiguous";
         let batch = BatchMut {
             observations: obs.as_buf_mut(),
@@ -145,40 +165,74 @@ impl PyVectorEnv {
             cause: cause.as_slice_mut().expect(contiguous),
             final_observations: final_obs.as_mut().map(ObsRw::as_buf_mut),
         };
-        let inner = &mut self.inner;
+        let inner = &mut this.inner;
         py.detach(|| f(inner, batch))?;
-        widen(rewards.as_slice_mut().expect(contiguous), &self.rewards32);
-        widen(fuel.as_slice_mut().expect(contiguous), &self.fuel32);
-        widen(lives.as_slice_mut().expect(contiguous), &self.lives32);
+        widen(rewards.as_slice_mut().expect(contiguous), &this.rewards32);
+        widen(fuel.as_slice_mut().expect(contiguous), &this.fuel32);
+        widen(lives.as_slice_mut().expect(contiguous), &this.lives32);
         drop((obs, final_obs, rewards, terminated, truncated, fuel, lives, cause));
-        PyTuple::new(
-            py,
-            [
-                a.obs.bind(py),
-                a.rewards.bind(py).clone().into_any(),
-                a.terminated.bind(py).clone().into_any(),
-                a.truncated.bind(py).clone().into_any(),
-                a.fuel.bind(py).clone().into_any(),
-                a.lives.bind(py).clone().into_any(),
-                a.cause.bind(py).clone().into_any(),
-                a.final_obs.as_ref().map_or_else(|| py.None().into_bound(py), |f| f.bind(py)),
-            ],
-        )
+        match &a.views {
+            Some(views) => PyTuple::new(py, views.iter().map(|v| v.bind(py))),
+            None => PyTuple::new(py, a.all(py)),
+        }
+    }
+}
+
+impl Arrays {
+    /// Every output, in the order `run` returns them (`None` for the final observations without `SAME_STEP`).
+    fn all<'py>(&self, py: Python<'py>) -> [Bound<'py, PyAny>; 8] {
+        [
+            self.obs.bind(py),
+            self.rewards.bind(py).clone().into_any(),
+            self.terminated.bind(py).clone().into_any(),
+            self.truncated.bind(py).clone().into_any(),
+            self.fuel.bind(py).clone().into_any(),
+            self.lives.bind(py).clone().into_any(),
+            self.cause.bind(py).clone().into_any(),
+            self.final_obs.as_ref().map_or_else(|| py.None().into_bound(py), |f| f.bind(py)),
+        ]
+    }
+}
+
+/// A count option (`num_envs`, `num_threads`) as `usize`, or a `ValueError` naming it.
+fn count(name: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    match value.extract::<usize>() {
+        Ok(n) if !value.is_instance_of::<pyo3::types::PyBool>() => Ok(n),
+        _ => Err(PyValueError::new_err(format!(
+            "invalid value {} for option `{name}`: allowed an integer >= 1 (that fits the memory budget)",
+            value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+        ))),
+    }
+}
+
+/// The `time_limit` (Python's `max_episode_steps`): `None` or an integer in `1..=u32::MAX`.
+fn time_limit(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<u32>> {
+    let Some(value) = value.filter(|v| !v.is_none()) else { return Ok(None) };
+    match value.extract::<u32>() {
+        Ok(n) if n >= 1 && !value.is_instance_of::<pyo3::types::PyBool>() => Ok(Some(n)),
+        _ => Err(PyValueError::new_err(format!(
+            "invalid value {} for option `max_episode_steps`: allowed an integer in 1..=4294967295, or None to never \
+             truncate",
+            value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
+        ))),
     }
 }
 
 #[pymethods]
 impl PyVectorEnv {
     #[new]
-    #[pyo3(signature = (num_envs, num_threads = 1, options = None, same_step = false, copy = true, time_limit = None))]
+    #[pyo3(signature = (num_envs, num_threads = None, options = None, same_step = false, copy = true, time_limit = None))]
     fn new(
-        num_envs: usize,
-        num_threads: usize,
+        num_envs: &Bound<'_, PyAny>,
+        num_threads: Option<&Bound<'_, PyAny>>,
         options: Option<&Bound<'_, PyDict>>,
         same_step: bool,
         copy: bool,
-        time_limit: Option<u32>,
+        time_limit: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyVectorEnv> {
+        let num_envs = count("num_envs", num_envs)?;
+        let num_threads = num_threads.map_or(Ok(1), |n| count("num_threads", n))?;
+        let time_limit = self::time_limit(time_limit)?;
         let config = config_from(options)?;
         let mode = if same_step { AutoresetMode::SameStep } else { AutoresetMode::NextStep };
         let mut inner = VectorEnv::with_mode(config, num_envs, num_threads, mode).map_err(env_error)?;
@@ -193,25 +247,27 @@ impl PyVectorEnv {
     /// Resets every environment: `seed` gives environment `i` the seed `seed + i`; `None` continues each
     /// stream. Returns the output arrays (see the class).
     #[pyo3(signature = (seed = None))]
-    fn reset<'py>(&mut self, py: Python<'py>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
-        self.run(py, |v, out| v.reset_into(seed, out).map_err(batch_error))
+    fn reset<'py>(slf: &Bound<'py, Self>, seed: Option<u64>) -> PyResult<Bound<'py, PyTuple>> {
+        PyVectorEnv::run(slf, |v, out| v.reset_into(seed, out).map_err(batch_error))
     }
 
     /// Resets every environment, environment `i` with `seeds[i]` (`None` continues its stream).
-    fn reset_seeds<'py>(&mut self, py: Python<'py>, seeds: Vec<Option<u64>>) -> PyResult<Bound<'py, PyTuple>> {
-        self.run(py, move |v, out| v.reset_seeds_into(&seeds, out).map_err(batch_error))
+    fn reset_seeds<'py>(slf: &Bound<'py, Self>, seeds: Vec<Option<u64>>) -> PyResult<Bound<'py, PyTuple>> {
+        PyVectorEnv::run(slf, move |v, out| v.reset_seeds_into(&seeds, out).map_err(batch_error))
     }
 
     /// Steps every environment; `actions` is a contiguous `int64` array of `num_envs` actions.
-    fn step<'py>(&mut self, py: Python<'py>, actions: PyReadonlyArray1<'py, i64>) -> PyResult<Bound<'py, PyTuple>> {
+    fn step<'py>(slf: &Bound<'py, Self>, actions: PyReadonlyArray1<'py, i64>) -> PyResult<Bound<'py, PyTuple>> {
         let actions = actions.as_slice().map_err(|e| PyValueError::new_err(format!("actions: {e}")))?;
-        self.run(py, |v, out| v.step_into(actions, out).map_err(batch_error))
+        PyVectorEnv::run(slf, |v, out| v.step_into(actions, out).map_err(batch_error))
     }
 
     /// The full 600 × 800 × 3 frame of environment `i`.
-    fn render<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        let env = self.env(i)?;
-        let frame = PyArray3::<u8>::zeros(py, [600, 800, 3], false);
+    fn render<'py>(slf: &Bound<'py, Self>, i: usize) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
+        let py = slf.py();
+        let this = slf.try_borrow().map_err(in_use)?;
+        let env = this.env(i)?;
+        let frame = crate::obs::zeros::<u8>(py, &[HEIGHT as usize, WIDTH as usize, 3])?;
         // SAFETY: `frame` was just created and is not shared yet.
         let rgb = unsafe { frame.as_slice_mut() }.expect("a fresh array is contiguous");
         py.detach(|| env.render_into(rgb)).map_err(env_error)?;
@@ -219,43 +275,28 @@ impl PyVectorEnv {
     }
 
     /// Snapshot bytes of environment `i` (what `chopperscape._core.Env.from_snapshot` reads).
-    fn snapshot<'py>(&self, py: Python<'py>, i: usize) -> PyResult<Bound<'py, PyBytes>> {
-        Ok(PyBytes::new(py, &Snapshot::to_bytes(&self.env(i)?.snapshot())))
+    fn snapshot<'py>(slf: &Bound<'py, Self>, i: usize) -> PyResult<Bound<'py, PyBytes>> {
+        Ok(PyBytes::new(slf.py(), &Snapshot::to_bytes(&slf.try_borrow().map_err(in_use)?.env(i)?.snapshot())))
     }
 
     /// The batch's state: `(started, [(snapshot bytes, pending reset, elapsed steps)] per environment)`.
-    fn state<'py>(&self, py: Python<'py>) -> (bool, Vec<(Bound<'py, PyBytes>, bool, u32)>) {
-        let envs = (0..self.inner.num_envs())
+    #[allow(clippy::type_complexity)]
+    fn state<'py>(slf: &Bound<'py, Self>) -> PyResult<(bool, Vec<(Bound<'py, PyBytes>, bool, u32)>)> {
+        let this = slf.try_borrow().map_err(in_use)?;
+        let envs = (0..this.inner.num_envs())
             .map(|i| {
-                let bytes = PyBytes::new(py, &self.inner.env(i).snapshot().to_bytes());
-                (bytes, self.inner.pending_reset(i), self.inner.elapsed(i))
+                let bytes = PyBytes::new(slf.py(), &this.inner.env(i).snapshot().to_bytes());
+                (bytes, this.inner.pending_reset(i), this.inner.elapsed(i))
             })
             .collect();
-        (self.inner.is_started(), envs)
+        Ok((this.inner.is_started(), envs))
     }
 
-    /// Restores [`PyVectorEnv::state`] (taken from a batch with the same options and size).
-    fn set_state(&mut self, started: bool, envs: Vec<(Vec<u8>, bool, u32)>) -> PyResult<()> {
-        if envs.len() != self.inner.num_envs() {
-            return Err(PyValueError::new_err(format!(
-                "state holds {} environments: this batch has {}",
-                envs.len(),
-                self.inner.num_envs()
-            )));
-        }
-        let snapshots = envs
-            .iter()
-            .map(|(bytes, _, _)| Snapshot::from_bytes(bytes).map_err(crate::errors::snapshot_error))
-            .collect::<PyResult<Vec<_>>>()?;
-        if started {
-            // Restore into a copy, so that a snapshot of other options leaves this batch as it was.
-            let mut next = self.inner.clone();
-            for (i, (snapshot, (_, pending, elapsed))) in snapshots.iter().zip(&envs).enumerate() {
-                next.restore_env(i, snapshot, *pending, *elapsed).map_err(env_error)?;
-            }
-            self.inner = next;
-        }
-        Ok(())
+    /// Restores [`PyVectorEnv::state`] (taken from a batch with the same options and size). Refuses, changing
+    /// nothing, a state the batch cannot be in (see `VectorEnv::restore_env`).
+    fn set_state(slf: &Bound<'_, Self>, started: bool, envs: Vec<(Vec<u8>, bool, u32)>) -> PyResult<()> {
+        let mut this = slf.try_borrow_mut().map_err(in_use)?;
+        this.set_state_of(started, envs)
     }
 
     /// Number of environments.
@@ -282,16 +323,10 @@ impl PyVectorEnv {
         self.inner.single_observation_space().dtype.as_str()
     }
 
-    /// Lower bound of each element of one observation, flat.
+    /// One period of the bounds of one observation, `(low, high)` (see `chopperscape._core.Env.obs_bounds`).
     #[getter]
-    fn obs_low<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
-        PyArray1::from_slice(py, &self.inner.single_observation_space().low)
-    }
-
-    /// Upper bound of each element of one observation, flat.
-    #[getter]
-    fn obs_high<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
-        PyArray1::from_slice(py, &self.inner.single_observation_space().high)
+    fn obs_bounds<'py>(&self, py: Python<'py>) -> BoundsArrays<'py> {
+        bounds(py, self.inner.single_observation_space())
     }
 
     /// Fuel at reset (the `max_fuel` option).
@@ -308,6 +343,29 @@ impl PyVectorEnv {
 }
 
 impl PyVectorEnv {
+    fn set_state_of(&mut self, started: bool, envs: Vec<(Vec<u8>, bool, u32)>) -> PyResult<()> {
+        if envs.len() != self.inner.num_envs() {
+            return Err(PyValueError::new_err(format!(
+                "state holds {} environments: this batch has {}",
+                envs.len(),
+                self.inner.num_envs()
+            )));
+        }
+        let snapshots = envs
+            .iter()
+            .map(|(bytes, _, _)| Snapshot::from_bytes(bytes).map_err(crate::errors::snapshot_error))
+            .collect::<PyResult<Vec<_>>>()?;
+        if started {
+            // Restore into a copy, so that a snapshot of other options leaves this batch as it was.
+            let mut next = self.inner.clone();
+            for (i, (snapshot, (_, pending, elapsed))) in snapshots.iter().zip(&envs).enumerate() {
+                next.restore_env(i, snapshot, *pending, *elapsed).map_err(env_error)?;
+            }
+            self.inner = next;
+        }
+        Ok(())
+    }
+
     fn env(&self, i: usize) -> PyResult<&chopperscape::ChopperScape> {
         if i >= self.inner.num_envs() {
             return Err(PyIndexError::new_err(format!(

@@ -35,6 +35,14 @@ pub enum BatchError {
     /// `step` before any `reset`.
     #[error("step called before reset: call reset() first")]
     NotReset,
+    /// An environment that can neither step nor reset (only reachable through a restored state).
+    #[error("environment {index} cannot step: its episode is {status} and no reset is pending")]
+    EnvState {
+        /// The first such environment.
+        index: usize,
+        /// Where its episode stands.
+        status: String,
+    },
     /// An output buffer of the wrong length or element type.
     #[error(
         "output buffer `{buffer}` has {got} elements of {got_dtype}: this batch writes {expected} elements of {expected_dtype}"

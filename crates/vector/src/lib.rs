@@ -32,9 +32,18 @@ mod pool;
 pub use buffers::{BatchMut, Buffers, CAUSE_BIRD, CAUSE_FUEL, CAUSE_NAMES, CAUSE_NONE, Observations, cause_code};
 pub use error::BatchError;
 
-use chopperscape::{BoxSpace, ChopperScape, Config, ConfigError, Env, N_ACTIONS, ObsBufMut};
+use chopperscape::limits::{check_budget, env_bytes, observation_bytes, probe};
+use chopperscape::{BoxSpace, ChopperScape, Config, ConfigError, Env, N_ACTIONS, ObsBufMut, SnapshotError, Status};
 
 use crate::pool::LazyPool;
+
+/// The most memory one batch may take: 16 GiB for its environments and its output buffers
+/// ([`VectorEnv::batch_bytes`]). A batch over it is refused with [`ConfigError::TooLarge`] before anything is
+/// allocated.
+pub const MAX_BATCH_BYTES: u64 = 16 << 30;
+
+/// The most worker threads a batch may ask for.
+pub const MAX_THREADS: usize = 1024;
 
 /// What a vector env does with an environment whose episode ended, as Gymnasium's `AutoresetMode`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -53,7 +62,7 @@ pub enum AutoresetMode {
 struct Slot {
     env: ChopperScape,
     ended: bool,
-    /// Steps since the last reset, for [`VectorEnv::set_time_limit`].
+    /// Steps since the last reset, for [`VectorEnv::set_time_limit`]; saturates at `u32::MAX`.
     elapsed: u32,
 }
 
@@ -80,7 +89,9 @@ impl VectorEnv {
     /// autoreset. Call [`VectorEnv::reset`] (or [`VectorEnv::reset_into`]) before stepping.
     ///
     /// # Errors
-    /// An option out of range, `num_envs == 0` or `num_threads == 0` (as [`chopperscape::Error::Config`]).
+    /// An option out of range, `num_envs == 0`, `num_threads` outside `1..=`[`MAX_THREADS`], or a batch whose
+    /// memory ([`VectorEnv::batch_bytes`]) is over [`MAX_BATCH_BYTES`] or refused by the system (all as
+    /// [`chopperscape::Error::Config`]). Nothing is allocated for a refused batch.
     pub fn new(config: Config, num_envs: usize, num_threads: usize) -> Result<VectorEnv, chopperscape::Error> {
         VectorEnv::with_mode(config, num_envs, num_threads, AutoresetMode::NextStep)
     }
@@ -95,18 +106,31 @@ impl VectorEnv {
         num_threads: usize,
         mode: AutoresetMode,
     ) -> Result<VectorEnv, chopperscape::Error> {
-        let positive = |option, v: usize| {
-            if v == 0 {
-                Err(ConfigError::OutOfRange { option, value: v.to_string(), allowed: "an integer >= 1" })
+        let in_range = |option, v: usize, max: usize, allowed| {
+            if v == 0 || v > max {
+                Err(ConfigError::OutOfRange { option, value: v.to_string(), allowed })
             } else {
                 Ok(())
             }
         };
-        positive("num_envs", num_envs)?;
-        positive("num_threads", num_threads)?;
+        in_range("num_envs", num_envs, usize::MAX, "an integer >= 1")?;
+        in_range("num_threads", num_threads, MAX_THREADS, "an integer >= 1 (at most 1024)")?;
+        config.validate()?;
+        let needed = VectorEnv::batch_bytes(&config, num_envs, mode);
+        let what = format!(
+            "a batch of num_envs={num_envs} environments (obs_type \"{}\", obs_size ({}, {}), frame_stack {})",
+            config.obs_type.as_str(),
+            config.obs_size.0,
+            config.obs_size.1,
+            config.frame_stack
+        );
+        check_budget(what.clone(), needed, MAX_BATCH_BYTES, "use fewer environments or smaller observations")?;
+        probe(needed, &what)?;
         let env = ChopperScape::new(config)?;
         let obs_len = env.obs_len();
-        let slots = vec![Slot { env, ended: false, elapsed: 0 }; num_envs];
+        let mut slots = Vec::new();
+        slots.try_reserve_exact(num_envs).map_err(|_| ConfigError::OutOfMemory { what, needed })?;
+        slots.resize(num_envs, Slot { env, ended: false, elapsed: 0 });
         let num_threads = num_threads.min(num_envs);
         let pool = LazyPool::new(num_threads - 1);
         Ok(VectorEnv {
@@ -120,6 +144,18 @@ impl VectorEnv {
             buffers: None,
             persistent: false,
         })
+    }
+
+    /// Bytes a batch of `num_envs` environments with these options takes: each environment (its state and
+    /// observation buffers, [`chopperscape::limits::env_bytes`]) and its share of the output buffers (one
+    /// observation, two with `SameStep`'s final observations, and the scalars). Saturates instead of overflowing.
+    pub fn batch_bytes(config: &Config, num_envs: usize, mode: AutoresetMode) -> u64 {
+        let obs = observation_bytes(config);
+        let finals = if mode == AutoresetMode::SameStep { obs } else { 0 };
+        // Rewards, flags, fuel, lives and cause, and the wider copies Python hands out.
+        let scalars = 64;
+        let per_env = std::mem::size_of::<Slot>() as u64 + env_bytes(config) + obs + finals + scalars;
+        per_env.saturating_mul(num_envs as u64)
     }
 
     /// Number of environments.
@@ -152,7 +188,7 @@ impl VectorEnv {
     /// `Some(0)` (as [`chopperscape::Error::Config`]).
     pub fn set_time_limit(&mut self, limit: Option<u32>) -> Result<(), chopperscape::Error> {
         if limit == Some(0) {
-            let allowed = "a positive integer, or none to never truncate";
+            let allowed = "an integer in 1..=4294967295, or none to never truncate";
             return Err(ConfigError::OutOfRange { option: "max_episode_steps", value: "0".into(), allowed }.into());
         }
         self.time_limit = limit;
@@ -218,8 +254,13 @@ impl VectorEnv {
     /// [`chopperscape::ChopperScape::snapshot`] of [`VectorEnv::env`], this saves and restores a whole batch.
     /// Marks the batch started.
     ///
+    /// The three must be a state the batch could be in, so that the next step can step every environment:
+    /// `elapsed` equals the snapshot's step count, and a reset is pending exactly when the episode ended (by
+    /// the rules, or by the time limit; `NextStep` mode only).
+    ///
     /// # Errors
-    /// A snapshot taken with other options; nothing changes then.
+    /// A snapshot taken with other options, or a state the batch cannot be in
+    /// ([`SnapshotError::Inconsistent`]); nothing changes then.
     ///
     /// # Panics
     /// If `i >= num_envs`.
@@ -230,6 +271,26 @@ impl VectorEnv {
         pending_reset: bool,
         elapsed: u32,
     ) -> Result<(), chopperscape::Error> {
+        let world = snapshot.world();
+        let inconsistent = |why: String| Err(SnapshotError::Inconsistent(format!("environment {i}: {why}")).into());
+        if elapsed != world.steps {
+            return inconsistent(format!("elapsed steps {elapsed} differ from the snapshot's {}", world.steps));
+        }
+        let over_limit = self.time_limit.is_some_and(|limit| elapsed >= limit);
+        let ended = world.status.is_over() || over_limit;
+        match (world.status, pending_reset) {
+            (Status::NotStarted, _) => return inconsistent("its snapshot was taken before any reset".into()),
+            (_, true) if self.mode == AutoresetMode::SameStep => {
+                return inconsistent("a pending reset in SAME_STEP mode (which resets at once)".into());
+            }
+            (status, false) if ended => {
+                return inconsistent(format!(
+                    "its episode is over ({status:?} after {elapsed} steps) but no reset is pending"
+                ));
+            }
+            (_, true) if !ended => return inconsistent("a reset is pending but its episode goes on".into()),
+            _ => {}
+        }
         let slot = &mut self.slots[i];
         slot.env.restore(snapshot)?;
         slot.ended = pending_reset;
@@ -307,10 +368,14 @@ impl VectorEnv {
         }
         let space = self.single_observation_space();
         out.check(self.num_envs(), self.obs_len, space.dtype)?;
-        let (obs_len, mode, limit) = (self.obs_len, self.mode, self.time_limit.unwrap_or(u32::MAX));
+        let (obs_len, mode, limit) = (self.obs_len, self.mode, self.time_limit);
         let persistent = self.persistent;
         if mode == AutoresetMode::SameStep && out.final_observations.is_none() {
             return Err(BatchError::MissingFinalObservations);
+        }
+        // All or nothing: every environment must be able to step (or reset) before any of them moves.
+        if let Some(index) = self.slots.iter().position(|s| !s.ended && s.env.world().status != Status::Running) {
+            return Err(BatchError::EnvState { index, status: format!("{:?}", self.slots[index].env.world().status) });
         }
         self.for_each_chunk(out, |first, slots, out| {
             let BatchMut { observations, rewards, terminated, truncated, fuel, lives, cause, final_observations } = out;
@@ -337,8 +402,8 @@ impl VectorEnv {
                     slot.env.step_into(action, reborrow(&mut obs))
                 }
                 .expect("actions, buffers and episode states were checked");
-                slot.elapsed += 1;
-                let truncated_now = t.truncated || slot.elapsed >= limit;
+                slot.elapsed = slot.elapsed.saturating_add(1);
+                let truncated_now = t.truncated || limit.is_some_and(|limit| slot.elapsed >= limit);
                 rewards[j] = t.reward;
                 terminated[j] = t.terminated;
                 truncated[j] = truncated_now;
