@@ -50,12 +50,20 @@ def _bounds_row(core) -> tuple[np.ndarray, np.ndarray, tuple[int, ...], np.dtype
     return np.tile(low, reps).reshape(shape), np.tile(high, reps).reshape(shape), shape, np.dtype(core.obs_dtype)
 
 
-def observation_box(core) -> spaces.Box:
-    """The observation space of one environment: a `Box` with the core's shape, dtype and bounds."""
+def observation_box(core, keep_dim: bool = False) -> spaces.Box:
+    """The observation space of one environment: a `Box` with the core's shape, dtype and bounds. With
+    `keep_dim`, a 2-D (grayscale, unstacked) observation gets a trailing channel axis: `(H, W, 1)`."""
     low, high, shape, dtype = _bounds_row(core)
     if dtype == np.uint8:
         low, high = np.asarray(0.0), np.asarray(255.0)
+    if keep_dim and len(shape) == 2:
+        shape = (*shape, 1)
     return BroadcastBox(low, high, shape, dtype)
+
+
+def channel_axis(keep_dim: Any, core) -> bool:
+    """Whether observations get a trailing channel axis: `keep_dim` (a bool) and a 2-D observation."""
+    return check_bool("keep_dim", keep_dim) and len(tuple(core.obs_shape)) == 2
 
 
 def batched_box(single: BroadcastBox, n: int) -> BroadcastBox:

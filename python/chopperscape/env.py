@@ -12,7 +12,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import OrderEnforcing, TimeLimit
 
 from . import _core
-from ._spaces import check_reset_options, core_seed, observation_box
+from ._spaces import channel_axis, check_reset_options, core_seed, observation_box
 
 #: `render_mode="human"` draws with pygame; it is declared only where pygame is installed, so that
 #: Gymnasium's checker (which tries every declared mode) passes everywhere.
@@ -43,8 +43,8 @@ class ChopperScapeEnv(gym.Env):
     Chosen by `obs_type`:
     - `"rgb"` (default): `Box(0, 255, (H, W, 3), uint8)`, the rendered frame, HUD included;
     - `"rgb_float"`: `Box(0, 1, (H, W, 3), float32)`;
-    - `"grayscale"`: `Box(0, 255, (H, W), uint8)`;
-    - `"features"`: `Box(low, high, (34,), float32)`, a description of the state:
+    - `"grayscale"`: `Box(0, 255, (H, W), uint8)` (`(H, W, 1)` with `keep_dim=True`);
+    - `"features"`: `Box(low, high, (46,), float32)`, a description of the state (layout version 2):
 
     | Index | Name | Min | Max |
     |-------|------|-----|-----|
@@ -52,13 +52,18 @@ class ChopperScapeEnv(gym.Env):
     | 1 | chopper y, `(y − 60) / 416` | 0 | 1 |
     | 2 | fuel left / max_fuel | 0 | 1 |
     | 3 | lives left / lives | 0 | 1 |
-    | 4–15 | 4 nearest birds: present, dx / 800, dy / 480 (centre to centre) | 0, −1, −1 | 1, 1, 1 |
-    | 16–21 | 2 nearest fuel tanks: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
-    | 22–27 | 2 nearest alien birds: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
-    | 28–33 | 2 nearest missiles: present, dx, dy | 0, −1, −1 | 1, 1, 1 |
+    | 4–19 | 4 birds that can still hit, soonest first: present, dx / 800, dy / 480 (centre to centre), in_lane | 0, −1, −1, 0 | 1, 1, 1, 1 |
+    | 20–27 | 2 fuel tanks that can still be caught, nearest first: present, dx, dy, reachable | 0, −1, −1, 0 | 1, 1, 1, 1 |
+    | 28–37 | 2 alien birds that can still hit: present, dx, dy, in_lane, next_shot (steps / 40) | 0, −1, −1, 0, 0 | 1, 1, 1, 1, 1 |
+    | 38–45 | 2 missiles that can still hit: present, dx, dy, in_lane | 0, −1, −1, 0 | 1, 1, 1, 1 |
+
+    `in_lane` is 1 when the hazard's row overlaps the chopper's (it hits unless one of them changes row);
+    `reachable` is 1 when flying straight sideways catches the tank before it rises past. Hazards that have passed
+    the chopper and tanks that have risen past it take no slot. The exact definitions and the version history are
+    in the Rust docs of `chopperscape::features`.
 
     `obs_size=(H, W)` (default `(600, 800)`) draws pixel observations at that size; `frame_stack=k` stacks the
-    last `k` observations on the last axis (`(34·k,)` for features).
+    last `k` observations on the last axis (`(46·k,)` for features).
 
     ## Rewards
     +1 for every step; −10 for a step in which a bird (or alien, or missile) hits the chopper. With
@@ -87,6 +92,7 @@ class ChopperScapeEnv(gym.Env):
     | `obs_size` | `(600, 800)` | `(H, W)`, each in 8..=4096 |
     | `frame_stack` | 1 | 1..=64 |
     | `hud` | `True` | draw the HUD line into pixel observations |
+    | `keep_dim` | `False` | give `"grayscale"` without stacking a channel axis, `(H, W, 1)` instead of `(H, W)` (what CNN policies such as SB3's `CnnPolicy` expect; a view, no copy) |
     | `lives` | 1 | 1..=1000 |
     | `bird_fuel_collision` | `"pass"` | `"pass"`, `"destroy"` |
     | `alien_prob` | 0 | [0, 1] |
@@ -118,7 +124,7 @@ class ChopperScapeEnv(gym.Env):
 
     metadata = {"render_modes": (["human"] if HUMAN_AVAILABLE else []) + ["rgb_array"], "render_fps": _core.RENDER_FPS}
 
-    def __init__(self, render_mode: str | None = None, **options: Any):
+    def __init__(self, render_mode: str | None = None, keep_dim: bool = False, **options: Any):
         if render_mode == "human" and not HUMAN_AVAILABLE:
             raise ValueError(
                 "option `render_mode`='human' needs pygame, which is not installed: pip install pygame "
@@ -137,7 +143,8 @@ class ChopperScapeEnv(gym.Env):
         self._core = _core.Env({**options, "max_episode_steps": None})
         self.render_mode = render_mode
         self.action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
-        self.observation_space = observation_box(self._core)
+        self._keep_dim = channel_axis(keep_dim, self._core)
+        self.observation_space = observation_box(self._core, self._keep_dim)
         self._stream_started = False
         self._window = None
         #: Set by the registered entry point: `gymnasium.make` wraps this env in a `TimeLimit`.
@@ -158,18 +165,18 @@ class ChopperScapeEnv(gym.Env):
         else:
             super().reset()
             core = None
-        result = self._core.reset(core)
+        obs, info = self._core.reset(core)
         self._stream_started = True
         if self.render_mode == "human":
             self.render()
-        return result
+        return (obs[..., None] if self._keep_dim else obs), info
 
     def step(self, action: Any) -> tuple[np.ndarray, SupportsFloat, bool, bool, dict[str, Any]]:
         """One step: `(obs, reward: float, terminated: bool, truncated: bool, info)`."""
-        result = self._core.step(action)
+        obs, reward, terminated, truncated, info = self._core.step(action)
         if self.render_mode == "human":
             self.render()
-        return result
+        return (obs[..., None] if self._keep_dim else obs), reward, terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
         """The 600 × 800 × 3 frame (`"rgb_array"`), or shows it in a window (`"human"`)."""

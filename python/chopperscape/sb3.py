@@ -57,17 +57,12 @@ class ChopperScapeVecEnv(VecEnv):
         render_mode: str | None = None,
         **options: Any,
     ):
-        if not isinstance(keep_dim, bool):
-            raise ValueError(f"invalid value {keep_dim!r} for option `keep_dim`: allowed True or False")
         self.venv = VectorEnv(
-            num_envs, autoreset_mode=AutoresetMode.SAME_STEP, copy=True, render_mode=render_mode, **options
+            num_envs, autoreset_mode=AutoresetMode.SAME_STEP, copy=True, render_mode=render_mode, keep_dim=keep_dim,
+            **options,
         )
-        space = self.venv.single_observation_space
-        self._add_channel = keep_dim and len(space.shape) == 2
-        if self._add_channel:
-            space = gym.spaces.Box(0, 255, (*space.shape, 1), np.uint8)
         self.render_mode = render_mode
-        super().__init__(self.venv.num_envs, space, self.venv.single_action_space)
+        super().__init__(self.venv.num_envs, self.venv.single_observation_space, self.venv.single_action_space)
         self.metadata = self.venv.metadata
         self._actions: np.ndarray | None = None
         self._ep_return = np.zeros(self.num_envs, np.float64)
@@ -75,9 +70,6 @@ class ChopperScapeVecEnv(VecEnv):
         self._t0 = time.perf_counter()
         if seed is not None:
             self.seed(seed)
-
-    def _obs(self, obs: np.ndarray) -> np.ndarray:
-        return obs[..., None] if self._add_channel else obs
 
     def reset(self) -> np.ndarray:
         seeds = self._seeds
@@ -92,7 +84,7 @@ class ChopperScapeVecEnv(VecEnv):
         self._ep_return[:] = 0
         self._ep_len[:] = 0
         self.reset_infos = [{"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i])} for i in range(self.num_envs)]
-        return self._obs(obs)
+        return obs
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = np.asarray(actions).reshape(self.num_envs)
@@ -114,7 +106,7 @@ class ChopperScapeVecEnv(VecEnv):
                     "fuel": int(final_info["fuel"][i]),
                     "lives": int(final_info["lives"][i]),
                     "TimeLimit.truncated": bool(truncated[i] and not terminated[i]),
-                    "terminal_observation": self._obs(info["final_obs"][i]),
+                    "terminal_observation": info["final_obs"][i],
                     "episode": {
                         "r": float(self._ep_return[i]),
                         "l": int(self._ep_len[i]),
@@ -128,7 +120,7 @@ class ChopperScapeVecEnv(VecEnv):
                 d = {"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i]), "TimeLimit.truncated": False}
             infos.append(d)
         assert ended is None or bool((ended == dones).all())
-        return self._obs(obs), rewards.astype(np.float32), dones, infos
+        return obs, rewards.astype(np.float32), dones, infos
 
     def close(self) -> None:
         self.venv.close()

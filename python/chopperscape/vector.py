@@ -12,7 +12,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from . import _core
-from ._spaces import batched_box, check_bool, check_reset_options, core_seed, observation_box
+from ._spaces import batched_box, channel_axis, check_bool, check_reset_options, core_seed, observation_box
 
 _CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
 
@@ -39,6 +39,7 @@ class VectorEnv(gym.vector.VectorEnv):
     | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, read-only (`writeable=False`), overwritten by the next `step`/`reset` (copy what you keep: pixel observations are drawn incrementally onto the previous frame). A bool |
     | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
     | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |
+    | `keep_dim` | `False` | `"grayscale"` without stacking as `(N, H, W, 1)`, with a channel axis (a view, no copy) |
     | `render_mode` | `None` | `"rgb_array"`: `render()` returns a tuple of 600 × 800 × 3 frames |
 
     Environment `i` of a batch reset with `seed=s` follows the trajectory of a single `ChopperScape-v0` seeded
@@ -65,6 +66,7 @@ class VectorEnv(gym.vector.VectorEnv):
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         max_episode_steps: int | None = 10_000,
         render_mode: str | None = None,
+        keep_dim: bool = False,
         **options: Any,
     ):
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -108,7 +110,8 @@ class VectorEnv(gym.vector.VectorEnv):
         self.autoreset_mode = autoreset_mode
         self.metadata = {**type(self).metadata, "autoreset_mode": autoreset_mode}
         self.max_episode_steps = max_episode_steps
-        self.single_observation_space = observation_box(self._core)
+        self._keep_dim = channel_axis(keep_dim, self._core)
+        self.single_observation_space = observation_box(self._core, self._keep_dim)
         self.observation_space = batched_box(self.single_observation_space, self.num_envs)
         self.single_action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -143,7 +146,7 @@ class VectorEnv(gym.vector.VectorEnv):
             out = self._core.reset(core)
         self._stream_started = True
         obs, _, _, _, fuel, lives, _, _ = out
-        return obs, self._infos(fuel, lives)
+        return self._shaped(obs), self._infos(fuel, lives)
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Steps every environment; see the class docstring for autoreset and infos."""
@@ -159,7 +162,11 @@ class VectorEnv(gym.vector.VectorEnv):
             infos = self._infos(fuel, lives, cause)
         else:
             infos = self._same_step_infos(final_obs, terminated | truncated, fuel, lives, cause)
-        return obs, rewards, terminated, truncated, infos
+        return self._shaped(obs), rewards, terminated, truncated, infos
+
+    def _shaped(self, obs: np.ndarray) -> np.ndarray:
+        """With `keep_dim`, the batch of 2-D frames as `(N, H, W, 1)`: a view, read-only if `obs` is."""
+        return obs[..., None] if self._keep_dim else obs
 
     def _checked_actions(self, actions: Any) -> np.ndarray:
         """`actions` as a contiguous int64 array, or `ValueError` naming what is wrong (values are checked in Rust)."""
@@ -198,7 +205,7 @@ class VectorEnv(gym.vector.VectorEnv):
         )
         objs = np.full(self.num_envs, None, dtype=object)
         for i in np.flatnonzero(ended):
-            objs[i] = final_obs[i].copy()
+            objs[i] = self._shaped(final_obs[i].copy())
         final_info: dict[str, Any] = {
             "fuel": np.where(ended, fuel, 0),
             "_fuel": ended.copy(),

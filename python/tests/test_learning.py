@@ -195,3 +195,30 @@ def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
     bad.write_text("steps,return\n1,2\n")
     assert plot.main([str(bad), "--out", str(tmp_path / "x.png")]) == 2
     assert "missing columns" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("mode", ["NEXT_STEP", "SAME_STEP"])
+def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
+    options = dict(obs_type="grayscale", obs_size=(84, 84), hud=False, max_fuel=30)
+    env = gym.make("ChopperScape-v0", keep_dim=True, **options)
+    plain = gym.make("ChopperScape-v0", **options)
+    assert env.observation_space.shape == (84, 84, 1)
+    obs, _ = env.reset(seed=2)
+    ref, _ = plain.reset(seed=2)
+    assert obs.shape == (84, 84, 1) and np.array_equal(obs[..., 0], ref) and env.observation_space.contains(obs)
+    obs, *_ = env.step(3)
+    assert np.array_equal(obs[..., 0], plain.step(3)[0])
+    envs = VectorEnv(2, keep_dim=True, autoreset_mode=gym.vector.AutoresetMode[mode], copy=False, **options)
+    assert envs.single_observation_space.shape == (84, 84, 1) and envs.observation_space.shape == (2, 84, 84, 1)
+    obs, _ = envs.reset(seed=2)
+    assert obs.shape == (2, 84, 84, 1) and np.array_equal(obs[0, ..., 0], ref) and not obs.flags.writeable
+    for _ in range(40):
+        obs, _, term, trunc, info = envs.step(np.array([4, 4]))
+        assert obs.shape == (2, 84, 84, 1)
+        if "final_obs" in info:
+            assert all(f.shape == (84, 84, 1) for f in info["final_obs"][info["_final_obs"]])
+    # Stacked or colour frames already have a channel axis: keep_dim changes nothing there.
+    stacked = gym.make("ChopperScape-v0", keep_dim=True, obs_type="grayscale", obs_size=(84, 84), frame_stack=4)
+    assert stacked.observation_space.shape == (84, 84, 4)
+    with pytest.raises(ValueError, match="keep_dim"):
+        gym.make("ChopperScape-v0", keep_dim="yes")
