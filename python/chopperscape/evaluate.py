@@ -3,7 +3,8 @@
     python -m chopperscape.evaluate MODEL --episodes 100 --seed 1000000
 
 `MODEL` is a file written by ``python -m chopperscape.train`` (``model.pt``), a Stable-Baselines3 ``.zip`` (then
-give the env options it was trained with: ``--option obs_type='"features"'``), or the name of a built-in pilot
+give the env options it was trained with: ``--option obs_type='"features"'``; a ``vecnormalize.pkl`` beside it
+normalises the observations as in training), or the name of a built-in pilot
 (``random``, ``heuristic``, ``noop``…, see ``chopperscape.pilots``), so that baselines come from the same seeds. Episode ``k`` is played on seed
 ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or to the 10,000-step truncation,
 with the greedy action (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
@@ -115,6 +116,15 @@ def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
         from stable_baselines3 import PPO
 
         model = PPO.load(path, device="cpu")
+        # A VecNormalize saved beside the model (as `python/examples/sb3_ppo.py --tuned` does) normalises its inputs.
+        stats = path.with_name("vecnormalize.pkl")
+        if stats.is_file():
+            import pickle
+
+            with open(stats, "rb") as f:
+                norm = pickle.load(f)
+            norm.training = False
+            return (lambda obs, envs: model.predict(norm.normalize_obs(obs), deterministic=not stochastic)[0]), env_options
         return (lambda obs, envs: model.predict(obs, deterministic=not stochastic)[0]), env_options
     import torch
 

@@ -222,3 +222,21 @@ def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
     assert stacked.observation_space.shape == (84, 84, 4)
     with pytest.raises(ValueError, match="keep_dim"):
         gym.make("ChopperScape-v0", keep_dim="yes")
+
+
+def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from chopperscape import evaluate
+    from chopperscape.sb3 import ChopperScapeVecEnv
+
+    env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
+    model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=1, device="cpu").learn(128)
+    model.save(tmp_path / "model.zip")
+    env.save(str(tmp_path / "vecnormalize.pkl"))
+    args = [str(tmp_path / "model.zip"), "--episodes", "2", "--option", 'obs_type="features"', "--option",
+            "max_fuel=100"]
+    assert evaluate.main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["episodes"] == 2 and set(out["causes"]) <= {"bird", "fuel", "truncated"} and out["greedy"]
