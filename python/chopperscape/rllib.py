@@ -45,7 +45,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from .vector import VectorEnv, default_threads
+from .vector import VectorEnv
 
 try:
     from ray.rllib.connectors.env_to_module.observation_preprocessor import SingleAgentObservationPreprocessor
@@ -177,14 +177,18 @@ class FloatPixels(SingleAgentObservationPreprocessor):
 
 
 def _runner_threads(num_envs: int) -> int:
-    """Threads for a runner's batch: at most the CPUs Ray gave the runner (`OMP_NUM_THREADS`, set by Ray to the
-    actor's `num_cpus`), and at most one per 64 envs."""
-    threads = default_threads(num_envs)
+    """Threads for a runner's batch: the CPUs Ray gave the runner (`OMP_NUM_THREADS`, set by Ray to the actor's
+    `num_cpus`), else the CPUs this process may use, and at most one per 64 envs. Unlike `VectorEnv`'s default
+    (one thread, since a learner usually shares the cores), a runner's CPUs are reserved for it by Ray."""
     try:
-        granted = int(os.environ.get("OMP_NUM_THREADS", ""))
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cpus = os.cpu_count() or 1
+    try:
+        cpus = min(cpus, int(os.environ.get("OMP_NUM_THREADS", "")))
     except ValueError:
-        return threads
-    return max(1, min(threads, granted))
+        pass
+    return max(1, min(cpus, num_envs // 64))
 
 
 def _find(env: Any, kind: type) -> Any:
