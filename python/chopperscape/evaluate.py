@@ -25,6 +25,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ._cli import env_options
 from .vector import VectorEnv
 
 #: Most environments stepped together while evaluating (bounded memory, whatever `--episodes`).
@@ -173,18 +174,10 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
     if not 0 <= a.seed < 2**63:
         p.error(f"--seed {a.seed}: allowed 0 <= seed < 2**63")
-    options: dict[str, Any] = {}
-    for item in a.option:
-        name, sep, value = item.partition("=")
-        if not sep:
-            p.error(f"--option {item!r}: expected NAME=VALUE")
-        try:
-            options[name] = json.loads(value)
-        except json.JSONDecodeError:
-            options[name] = value
+    options = env_options(p, a.option)
     try:
-        act, env_options = load_policy(a.model, a.stochastic, a.seed, options)
-        results = play_episodes(act, a.episodes, a.seed, env_options)
+        act, play_options = load_policy(a.model, a.stochastic, a.seed, options)
+        results = play_episodes(act, a.episodes, a.seed, play_options)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

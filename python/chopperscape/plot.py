@@ -62,16 +62,17 @@ def main(argv: list[str] | None = None) -> int:
         minutes = [w / 60 for w in run["wall_s"]]
         for ax, x in ((ax_steps, steps), (ax_time, minutes)):
             (line,) = ax.plot(x, run["mean_return"], label=label)
-            ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.15, linewidth=0)
+            ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.15 if len(runs) == 1 else 0.05, linewidth=0)
     for item in a.hline:
         name, _, value = item.partition("=")
         for ax in (ax_steps, ax_time):
             ax.axhline(float(value), linestyle="--", color="grey", linewidth=1)
-        ax_steps.annotate(name, (0, float(value)), xytext=(3, 3), textcoords="offset points", color="grey")
+        ax_time.annotate(name, (1, float(value)), xycoords=("axes fraction", "data"), xytext=(-3, 3),
+                         textcoords="offset points", ha="right", color="grey")
     ax_steps.set_xlabel("env steps (millions)")
     ax_time.set_xlabel("wall-clock minutes (2-core machine)")
     ax_steps.set_ylabel("mean return")
-    ax_steps.legend(loc="upper left")
+    ax_steps.legend(loc="upper left", fontsize="small")
     for ax in (ax_steps, ax_time):
         ax.grid(alpha=0.3)
     fig.suptitle(a.title)

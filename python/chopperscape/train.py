@@ -36,6 +36,7 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.train needs PyTorch: pip install torch (the CPU build is enough)"
     ) from err
 
+from ._cli import env_options
 from .vector import VectorEnv
 
 #: Columns of the progress CSV, shared with the RLlib example and the plot script.
@@ -318,15 +319,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--no-norm-obs", action="store_true")
     p.add_argument("--no-norm-reward", action="store_true")
     a = p.parse_args(argv)
-    options: dict[str, Any] = {}
-    for item in a.option:
-        name, sep, value = item.partition("=")
-        if not sep:
-            p.error(f"--option {item!r}: expected NAME=VALUE, e.g. frame_skip=4")
-        try:
-            options[name] = json.loads(value)
-        except json.JSONDecodeError:
-            options[name] = value
+    options = env_options(p, a.option)
     recipe = Recipe(
         **{k: getattr(a, k) for k in ("obs_type", "num_envs", "num_steps", "gamma", "gae_lambda", "learning_rate",
                                       "update_epochs", "num_minibatches", "clip_coef", "ent_coef", "vf_coef",
