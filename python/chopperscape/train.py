@@ -158,7 +158,7 @@ def save(path: Path, agent: Agent, obs_norm: ObsNormalizer, recipe: Recipe, obs_
     os.replace(tmp, path)
 
 
-def train(recipe: Recipe, out: Path, minutes: float | None, total_steps: int | None, log_every: int = 1) -> Path:
+def train(recipe: Recipe, out: Path, minutes: float | None, total_steps: int | None) -> Path:
     """Runs PPO until `minutes` of wall time or `total_steps` env steps (whichever first); returns the model path."""
     if minutes is None and total_steps is None:
         raise ValueError("give a time budget (minutes) or a step budget (total_steps)")
@@ -243,7 +243,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None, total_steps: int | N
                 r = reward.astype(np.float64)
                 if recipe.norm_reward:
                     disc_return = np.where(valid, disc_return * recipe.gamma + r, 0.0)
-                    ret_rms.update(disc_return[valid]) if valid.any() else None
+                    if valid.any():
+                        ret_rms.update(disc_return[valid])
                     r = r / math.sqrt(ret_rms.var + 1e-8)
                     disc_return[done] = 0.0
                 buf_rew[t] = torch.from_numpy(np.where(valid, r, 0.0).astype(np.float32))
@@ -287,7 +288,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None, total_steps: int | N
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {update}")
             update += 1
-            if update % log_every == 0 and finished:
+            if finished:
                 rets = np.array([r for r, _ in finished])
                 lens = np.array([l for _, l in finished])
                 writer.writerow(
