@@ -1,7 +1,7 @@
 //! Turns a [`World`] into the observation the agent sees: features or pixels, stacked `frame_stack` deep.
 //!
 //! Stacking concatenates on the last axis, oldest first: `rgb` `(H, W, 3k)`, `rgb_float` `(H, W, 3k)`,
-//! `grayscale` `(H, W, k)` (no extra axis when `k = 1`: `(H, W)`), `features` `(34k,)`. Reset fills the
+//! `grayscale` `(H, W, k)` (no extra axis when `k = 1`: `(H, W)`), `features` `(46k,)`. Reset fills the
 //! stack with the first observation.
 //!
 //! Grayscale is the integer BT.601 luma of the rgb frame: `(299·R + 587·G + 114·B + 500) / 1000`. It is drawn
@@ -27,7 +27,7 @@ use std::sync::OnceLock;
 pub(crate) struct Observer {
     obs_type: ObsType,
     k: usize,
-    /// Elements per pixel of one unstacked observation: 3 for rgb, 1 for grayscale, 34 for features
+    /// Elements per pixel of one unstacked observation: 3 for rgb, 1 for grayscale, 46 (`FEATURES_LEN`) for features
     /// (the features vector stacks as one "pixel").
     channels: usize,
     /// The frame the renderer draws into, incrementally (pixel types only): RGB, or gray for `grayscale`.
@@ -236,7 +236,7 @@ impl Observer {
     }
 }
 
-/// Elements of one unstacked observation of `config`, and elements per pixel (34 for features, whose vector
+/// Elements of one unstacked observation of `config`, and elements per pixel (46 for features, whose vector
 /// stacks as one "pixel").
 fn single_len(config: &Config) -> (usize, usize) {
     let (h, w) = (config.obs_size.0 as usize, config.obs_size.1 as usize);
