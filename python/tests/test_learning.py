@@ -11,7 +11,6 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import chopperscape
 from chopperscape import VectorEnv
 
 from conftest import SHORT
