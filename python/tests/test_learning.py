@@ -4,6 +4,7 @@ through it, and Gymnasium's vector wrappers on the native batch. Smoke sizes onl
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 
@@ -15,9 +16,16 @@ from chopperscape import VectorEnv
 
 from conftest import SHORT
 
-torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
+needs_torch = pytest.mark.skipif(
+    importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
+)
+needs_sb3 = pytest.mark.skipif(
+    importlib.util.find_spec("stable_baselines3") is None or importlib.util.find_spec("torch") is None,
+    reason="stable-baselines3 is not installed (scripts/test-python.sh installs it)",
+)
 
 
+@needs_torch
 def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     from chopperscape import evaluate, train
 
@@ -52,6 +60,7 @@ def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
     assert [(e["seed"], e["return"], e["steps"]) for e in out["per_episode"]] == expected
 
 
+@needs_torch
 def test_evaluate_names_a_bad_model_file(tmp_path, capsys):
     from chopperscape import evaluate
 
@@ -77,9 +86,9 @@ def test_evaluation_episodes_replay_single_envs():
         assert (r["return"], r["steps"]) == (total, steps)
 
 
-sb3 = pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not installed")
 
 
+@needs_sb3
 def test_sb3_adapter_equals_make_vec_env_trajectory_for_trajectory():
     from stable_baselines3.common.env_util import make_vec_env
 
@@ -108,6 +117,7 @@ def test_sb3_adapter_equals_make_vec_env_trajectory_for_trajectory():
     assert ended > 20
 
 
+@needs_sb3
 def test_sb3_adapter_reports_truncation_as_sb3_does():
     from chopperscape.sb3 import ChopperScapeVecEnv
 
@@ -123,6 +133,7 @@ def test_sb3_adapter_reports_truncation_as_sb3_does():
     assert not np.array_equal(obs[0], infos[0]["terminal_observation"])
 
 
+@needs_sb3
 def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
     from stable_baselines3 import PPO
     from stable_baselines3.common.evaluation import evaluate_policy
@@ -133,6 +144,8 @@ def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
     model = PPO("MlpPolicy", env, n_steps=128, batch_size=128, n_epochs=1, seed=0, device="cpu")
     model.learn(1024)
     assert len(model.ep_info_buffer) > 0, "episode statistics reach SB3's logger without a Monitor"
+    import torch
+
     assert all(torch.isfinite(p).all() for p in model.policy.parameters())
     model.save(tmp_path / "ppo")
     again = PPO.load(tmp_path / "ppo", device="cpu")
@@ -142,6 +155,7 @@ def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
     assert mean > 0
 
 
+@needs_sb3
 def test_sb3_cnn_policy_accepts_grayscale_with_a_channel_axis():
     from stable_baselines3 import PPO
 
@@ -223,6 +237,7 @@ def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
         gym.make("ChopperScape-v0", keep_dim="yes")
 
 
+@needs_sb3
 def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
