@@ -63,9 +63,8 @@ def single(env, own: bool):
     return step
 
 
-def vector(num_envs: int, threads: int, copy: bool, **options):
-    envs = chopperscape.VectorEnv(num_envs, num_threads=threads, copy=copy, **options)
-    envs.reset(seed=0)
+def batch_steps(envs, num_envs: int):
+    """A `step()` for `rate` that steps a batch of `num_envs` with random actions, cycling through 64 batches."""
     batches = np.random.default_rng(0).integers(0, 5, (64, num_envs))
     state = {"t": 0}
 
@@ -75,6 +74,12 @@ def vector(num_envs: int, threads: int, copy: bool, **options):
         return num_envs
 
     return step
+
+
+def vector(num_envs: int, threads: int, copy: bool, **options):
+    envs = chopperscape.VectorEnv(num_envs, num_threads=threads, copy=copy, **options)
+    envs.reset(seed=0)
+    return batch_steps(envs, num_envs)
 
 
 def sb3_vec(kind: str, num_envs: int):
@@ -87,15 +92,7 @@ def sb3_vec(kind: str, num_envs: int):
 
         envs = make_vec_env("ChopperScape-v0", n_envs=num_envs, seed=0, env_kwargs={"obs_type": "features"})
     envs.reset()
-    batches = np.random.default_rng(0).integers(0, 5, (64, num_envs))
-    state = {"t": 0}
-
-    def step() -> int:
-        state["t"] = (state["t"] + 1) & 63
-        envs.step(batches[state["t"]])
-        return num_envs
-
-    return step
+    return batch_steps(envs, num_envs)
 
 
 def main() -> None:

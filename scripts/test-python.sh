@@ -41,18 +41,24 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$hash" ] || ! "$PY" -c "import choppersca
   echo "$hash" >"$stamp"
 fi
 
-log=$(mktemp)
-# Run from the repository root, so that python/chopperscape (sources without the extension) is not importable.
-if SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy "$PY" -m pytest -q -p no:cacheprovider -c python/pyproject.toml \
-  python/tests >"$log" 2>&1; then
-  grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
-  rm -f "$log"
-else
-  rc=$?
-  cat "$log" >&2
-  rm -f "$log"
-  exit "$rc"
-fi
+# run_pytest PYTHON PATH...: pytest quietly, from the repository root (so that python/chopperscape, sources without
+# the extension, is not importable); prints its summary line, or everything and exits with its status on failure.
+run_pytest() {
+  local py=$1 log rc
+  shift
+  log=$(mktemp)
+  if SDL_VIDEODRIVER=dummy SDL_AUDIODRIVER=dummy "$py" -m pytest -q -p no:cacheprovider -c python/pyproject.toml \
+    "$@" >"$log" 2>&1; then
+    grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
+    rm -f "$log"
+  else
+    rc=$?
+    cat "$log" >&2
+    rm -f "$log"
+    exit "$rc"
+  fi
+}
+run_pytest "$PY" python/tests
 
 # Ray RLlib (python/tests/test_rllib.py, docs/rllib.md). Ray pins gymnasium==1.2.2, so RLlib gets its own
 # environment, .venv-rllib, with ray[rllib] and torch from PyPI and this package linked in from .venv (built
@@ -79,13 +85,4 @@ if [ -e "$rsite/chopperscape" ] && [ ! -L "$rsite/chopperscape" ]; then  # a cop
   rm -rf "$rsite/chopperscape"
 fi
 ln -sfn "$pkg" "$rsite/chopperscape"
-log=$(mktemp)
-if "$RPY" -m pytest -q -p no:cacheprovider -c python/pyproject.toml python/tests/test_rllib.py >"$log" 2>&1; then
-  grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
-  rm -f "$log"
-else
-  rc=$?
-  cat "$log" >&2
-  rm -f "$log"
-  exit "$rc"
-fi
+run_pytest "$RPY" python/tests/test_rllib.py
