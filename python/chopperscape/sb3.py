@@ -97,7 +97,6 @@ class ChopperScapeVecEnv(VecEnv):
         dones = terminated | truncated
         self._ep_return += rewards
         self._ep_len += 1
-        ended = info.get("_final_obs")
         final_info = info.get("final_info", {})
         infos: list[dict[str, Any]] = []
         for i in range(self.num_envs):
@@ -119,7 +118,6 @@ class ChopperScapeVecEnv(VecEnv):
             else:
                 d = {"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i]), "TimeLimit.truncated": False}
             infos.append(d)
-        assert ended is None or bool((ended == dones).all())
         return obs, rewards.astype(np.float32), dones, infos
 
     def close(self) -> None:
