@@ -32,7 +32,8 @@ quiet "$PY" -m pip install --disable-pip-version-check -q "maturin>=1.9.4,<2" "g
 
 # Rebuild the extension only when something it is built from changed.
 stamp=.venv/.chopperscape-build
-sources=$(find Cargo.toml Cargo.lock python/pyproject.toml python/chopperscape crates/core crates/vector crates/python \
+sources=$(find Cargo.toml Cargo.lock python/pyproject.toml python/chopperscape crates/core crates/vector crates/actionlog \
+  crates/python \
   -type f -not -path '*/__pycache__/*' | LC_ALL=C sort)
 hash=$(printf '%s\n' "$sources" | xargs cat | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$stamp" 2>/dev/null)" != "$hash" ] || ! "$PY" -c "import chopperscape._core" >/dev/null 2>&1; then

@@ -14,6 +14,7 @@ enum Edit {
     ObsType(u8),
     ObsSize(u32, u32),
     FrameStack(u32),
+    HudStyle(u8),
     Lives(u32),
     FrameSkip(u32),
     MaxFuel(u32),
@@ -39,6 +40,7 @@ enum Edit {
 struct Input {
     obs_type: u8,
     frame_stack: u8,
+    hud_style: u8,
     lives: u8,
     aliens: bool,
     destroy: bool,
@@ -48,13 +50,14 @@ struct Input {
     steps_after: Vec<u8>,
 }
 
-/// A snapshot's payload as fields, in format order (version 1: see crates/core/src/snapshot.rs).
+/// A snapshot's payload as fields, in format order (version 2: see crates/core/src/snapshot.rs).
 #[derive(Clone, Debug)]
 struct Fields {
     head: [u8; 1],
     obs_size: (u32, u32),
     frame_stack: u32,
     hud: u8,
+    hud_style: u8,
     lives: u32,
     bfc: u8,
     alien_prob: f64,
@@ -113,6 +116,7 @@ fn parse(bytes: &[u8]) -> Fields {
         obs_size: (r.u32(), r.u32()),
         frame_stack: r.u32(),
         hud: r.u8(),
+        hud_style: r.u8(),
         lives: r.u32(),
         bfc: r.u8(),
         alien_prob: r.f64(),
@@ -154,6 +158,7 @@ fn encode(f: &Fields, stack_len: Option<u32>) -> Vec<u8> {
     u32(&mut p, f.obs_size.1);
     u32(&mut p, f.frame_stack);
     p.push(f.hud);
+    p.push(f.hud_style);
     u32(&mut p, f.lives);
     p.push(f.bfc);
     p.extend_from_slice(&f.alien_prob.to_le_bytes());
@@ -214,6 +219,7 @@ fn apply(f: &mut Fields, e: &Edit, stack_len: &mut Option<u32>) {
         Edit::ObsType(t) => f.head[0] = t % 5,
         Edit::ObsSize(h, w) => f.obs_size = (h, w),
         Edit::FrameStack(k) => f.frame_stack = k,
+        Edit::HudStyle(v) => f.hud_style = v,
         Edit::Lives(l) => f.lives = l,
         Edit::FrameSkip(s) => f.frame_skip = s,
         Edit::MaxFuel(m) => f.max_fuel = m,
@@ -278,6 +284,7 @@ fuzz_target!(|input: Input| {
         obs_type,
         obs_size: (8 + u32::from(input.obs_type % 5), 8 + u32::from(input.obs_type % 7)),
         frame_stack: 1 + u32::from(input.frame_stack % 4),
+        hud_style: chopperscape::HudStyle::ALL[input.hud_style as usize % 3],
         lives: 1 + u32::from(input.lives % 4),
         alien_prob: if input.aliens { 0.2 } else { 0.0 },
         bird_prob: 0.2,

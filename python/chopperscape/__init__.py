@@ -24,11 +24,18 @@ __all__ = [
     "pilots",
     "ACTION_MEANINGS",
     "OPTION_NAMES",
+    "FEATURES_VERSION",
+    "PIXELS_VERSION",
     "__version__",
 ]
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
+#: The layout version of the `"features"` observation.
+FEATURES_VERSION: int = _core.FEATURES_VERSION
+#: The version of what pixel observations show (docs/SPEC.md, "HUD and pixel layout"): 2 = fuel and lives gauges
+#: in frames under 300 × 400 with the default `hud_style="auto"`; 1 = the text line at every size.
+PIXELS_VERSION: int = _core.PIXELS_VERSION
 
 if "ChopperScape-v0" not in registry:
     register(

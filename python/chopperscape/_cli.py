@@ -1,22 +1,103 @@
-"""What the package's command lines (`python -m chopperscape.train`, `.evaluate`) share."""
+"""What the package's command lines (`python -m chopperscape.train`, `.evaluate`, `.datasets`) share: reading
+`--option NAME=VALUE` per option type, and writing the result line to standard output."""
 
 from __future__ import annotations
 
 import argparse
 import json
-from typing import Any
+import os
+import sys
+from typing import Any, Iterable
+
+from . import _core
+
+#: Every option of the core (`Config::set`), as `--option` takes it, `max_episode_steps` included.
+CORE_OPTIONS: tuple[str, ...] = tuple(_core.OPTION_NAMES)
+#: Options the Python environments add to the core's (bools).
+PYTHON_BOOL_OPTIONS: tuple[str, ...] = ("keep_dim",)
+#: What `--option` takes by default: the options of `gymnasium.make("ChopperScape-v0", ...)`.
+ENV_OPTIONS: tuple[str, ...] = CORE_OPTIONS + PYTHON_BOOL_OPTIONS
 
 
-def env_options(parser: argparse.ArgumentParser, items: list[str]) -> dict[str, Any]:
-    """`--option NAME=VALUE` items as env keyword options; a value is read as JSON (`4`, `[84, 84]`, `"features"`)
-    and kept as text when it is not JSON. A malformed item ends the program through `parser.error`."""
+def option_value(name: str, text: str) -> Any:
+    """The typed value of option `name` given as text: parsed by the core's own option parser (`Config::set`),
+    so `--option hud=false` is the bool `False`, `obs_size=84x84` the tuple `(84, 84)`, `max_episode_steps=none`
+    `None`, `lives=3` the int 3, exactly as the `chopperscape` command line reads its flags. A JSON string, list or
+    null is read too (`obs_type='"features"'`, `obs_size=[84,84]`, `max_episode_steps=null`). `ValueError`
+    naming the option and what it allows."""
+    text = text.strip()
+    try:
+        doc = json.loads(text)
+    except ValueError:
+        doc = text
+    if isinstance(doc, str):
+        text = doc.strip()
+    elif doc is None:
+        text = "none"
+    elif isinstance(doc, list) and all(isinstance(v, int) and not isinstance(v, bool) for v in doc):
+        text = ",".join(str(v) for v in doc)
+    if name in PYTHON_BOOL_OPTIONS:
+        if text in ("true", "false"):
+            return text == "true"
+        raise ValueError(f"invalid value {text!r} for option `{name}`: allowed true or false")
+    return _core.option_value(name, text)
+
+
+def parse_options(
+    items: Iterable[str], allowed: Iterable[str] = ENV_OPTIONS, refused: dict[str, str] | None = None
+) -> dict[str, Any]:
+    """`--option NAME=VALUE` items as keyword options, each value read by `option_value`. `allowed` are the
+    names this tool takes; `refused` maps names it does not take to the reason (say what to use instead).
+    `ValueError` for a malformed item, a name not allowed, a value its option does not allow, or a name twice."""
+    allowed = tuple(allowed)
+    refused = refused or {}
     options: dict[str, Any] = {}
     for item in items:
         name, sep, value = item.partition("=")
+        name = name.strip()
         if not sep or not name:
-            parser.error(f"--option {item!r}: expected NAME=VALUE, e.g. --option frame_skip=4")
-        try:
-            options[name] = json.loads(value)
-        except json.JSONDecodeError:
-            options[name] = value
+            raise ValueError(f"--option {item!r}: expected NAME=VALUE, e.g. --option frame_skip=4")
+        if name in refused:
+            raise ValueError(f"--option {name}: {refused[name]}")
+        if name not in allowed:
+            raise ValueError(f"--option {name}: unknown option; allowed: {', '.join(allowed)}")
+        if name in options:
+            raise ValueError(f"--option {name} is given twice")
+        options[name] = option_value(name, value)
     return options
+
+
+def env_options(
+    parser: argparse.ArgumentParser,
+    items: list[str],
+    allowed: Iterable[str] = ENV_OPTIONS,
+    refused: dict[str, str] | None = None,
+) -> dict[str, Any]:
+    """`parse_options`, ending the program through `parser.error` (exit status 2) on a bad item."""
+    try:
+        return parse_options(items, allowed, refused)
+    except ValueError as e:
+        parser.error(str(e))
+
+
+def print_line(text: str) -> int:
+    """Writes `text` and a newline to standard output; returns the exit status: 0, or for a closed pipe
+    (`| head -0`) 141 with nothing more said (as the `chopperscape` command line and `yes | head` end), or 1 with
+    one line on standard error for any other write error (`> /dev/full`). Never a traceback: standard output is
+    pointed at /dev/null afterwards, so Python's own flush at exit cannot fail either."""
+    try:
+        sys.stdout.write(text + "\n")
+        sys.stdout.flush()
+        return 0
+    except BrokenPipeError:
+        status = 141
+    except OSError as e:
+        print(f"error: cannot write to standard output: {e}", file=sys.stderr)
+        status = 1
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
+    return status

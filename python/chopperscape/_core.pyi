@@ -9,6 +9,11 @@ ACTION_MEANINGS: list[str]
 OPTION_NAMES: list[str]
 CAUSE_NAMES: list[str]
 SNAPSHOT_VERSION: int
+#: The layout version of the `"features"` observation (the Rust docs of `chopperscape::features` give the history).
+FEATURES_VERSION: int
+#: The version of what pixel observations show: 2 draws the fuel and lives gauges in frames under 300 × 400
+#: (`hud_style="auto"`), 1 drew the text line at every size (docs/SPEC.md, "HUD and pixel layout").
+PIXELS_VERSION: int
 RENDER_FPS: int
 PILOT_NAMES: list[str]
 #: The most memory one environment's observation buffers may take (bytes); options over it raise ValueError.
@@ -17,7 +22,18 @@ MAX_ENV_BYTES: int
 MAX_BATCH_BYTES: int
 #: The most worker threads a VectorEnv may ask for.
 MAX_THREADS: int
+#: The largest action log `read_action_log` reads (bytes), as `chopperscape replay`.
+MAX_LOG_BYTES: int
 __version__: str
+
+def option_value(name: str, text: str) -> Any:
+    """Option `name` written as command-line text (`84x84`, `false`, `none`), typed by the core's parser:
+    int, float, str, bool, an (h, w) tuple or None. ValueError naming the option and what it allows."""
+
+def read_action_log(path: str) -> dict[str, Any]:
+    """The action log at `path`, read and checked by the command line's reader (at most MAX_LOG_BYTES):
+    seed, options (rules as text, but max_episode_steps), max_episode_steps, actions (bytes), steps, return,
+    cause, policy. ValueError naming the file and what is wrong."""
 
 Info = dict[str, Any]
 

@@ -1,4 +1,5 @@
-"""Gymnasium spaces built from what the Rust core declares, and the argument rules both environments share."""
+"""Gymnasium spaces built from what the Rust core declares. (The argument rules both environments share are in
+`_checks.py`; `check_bool`, `core_seed` and `check_reset_options` are re-exported here.)"""
 
 from __future__ import annotations
 
@@ -7,7 +8,10 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-_U64 = 0xFFFF_FFFF_FFFF_FFFF
+from ._checks import check_bool, check_reset_options, core_seed
+
+__all__ = ["BroadcastBox", "observation_box", "channel_axis", "batched_box", "check_bool", "check_reset_options",
+           "core_seed"]
 
 
 class BroadcastBox(spaces.Box):
@@ -70,33 +74,3 @@ def batched_box(single: BroadcastBox, n: int) -> BroadcastBox:
     """`single` stacked `n` times on a new first axis, still without bounds per element."""
     low, high = single._row
     return BroadcastBox(low, high, (n, *single.shape), single.dtype)
-
-
-def core_seed(seed: Any, what: str = "seed") -> int:
-    """A Gymnasium seed as the core's `u64` seed: a non-negative integer (numpy's too), reduced modulo 2**64.
-
-    The one seed rule of `ChopperScapeEnv.reset` and `VectorEnv.reset` (a single seed or each one of a list).
-    """
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(
-            f"invalid {what} {seed!r}: allowed a non-negative integer (seeds of 2**64 and above are reduced "
-            "modulo 2**64), or None"
-        )
-    return int(seed) & _U64
-
-
-def check_reset_options(options: Any) -> None:
-    """The one rule for `reset(options=...)` of both environments: ChopperScape's reset takes no options."""
-    if options:
-        names = sorted(options) if isinstance(options, dict) else options
-        raise ValueError(
-            f"reset options {names!r} are not supported: ChopperScape's reset takes no options "
-            "(a partial reset with options['reset_mask'] is not supported either)"
-        )
-
-
-def check_bool(option: str, value: Any) -> bool:
-    """A bool option (`copy`, `hud`, ...): `True` or `False` (numpy's too), never a string or a number."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"invalid value {value!r} for option `{option}`: allowed True or False")
-    return bool(value)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 from typing import Any, SupportsFloat
 
@@ -12,6 +13,7 @@ from gymnasium import spaces
 from gymnasium.wrappers import OrderEnforcing, TimeLimit
 
 from . import _core
+from ._checks import time_limit
 from ._spaces import channel_axis, check_reset_options, core_seed, observation_box
 
 #: `render_mode="human"` draws with pygame; it is declared only where pygame is installed, so that
@@ -41,7 +43,7 @@ class ChopperScapeEnv(gym.Env):
 
     ## Observation Space
     Chosen by `obs_type`:
-    - `"rgb"` (default): `Box(0, 255, (H, W, 3), uint8)`, the rendered frame, HUD included;
+    - `"rgb"` (default): `Box(0, 255, (H, W, 3), uint8)`, the rendered frame, HUD included (see below);
     - `"rgb_float"`: `Box(0, 1, (H, W, 3), float32)`;
     - `"grayscale"`: `Box(0, 255, (H, W), uint8)` (`(H, W, 1)` with `keep_dim=True`);
     - `"features"`: `Box(low, high, (46,), float32)`, a description of the state (layout version 2):
@@ -64,6 +66,17 @@ class ChopperScapeEnv(gym.Env):
 
     `obs_size=(H, W)` (default `(600, 800)`) draws pixel observations at that size; `frame_stack=k` stacks the
     last `k` observations on the last axis (`(46·k,)` for features).
+
+    **The HUD in pixel observations** (pixel layout version 2, `chopperscape.PIXELS_VERSION`), in the
+    `⌊H / 10⌋` rows above the flight band. Frames at least 300 × 400 show the tutorial's text line
+    `Fuel Left: N | Rewards: N | Lives: N`. Smaller frames, where that text is illegible, show two bars a network
+    can read instead (`hud_style="auto"`): at 84 × 84 the fuel bar fills rows 1–3 and the lives bar rows 5–6,
+    all 84 columns. A bar showing `v` of `m` (`fuel` of `max_fuel`, `lives` left of `lives`) holds
+    `I = round(255 · 84 · v / m)` units of ink from the left: black pixels, one grey pixel of level
+    `255 − (I mod 255)`, then white. Decode one row with `I = sum(255 − row)` and `v = I · m / (255 · 84)`:
+    fuel to within 0.003 % of `max_fuel`, lives exactly. The same grey levels appear in rgb (`(g, g, g)`) and
+    grayscale. `hud_style="text"` draws the text at every size (version 1), `"gauge"` the bars at every size
+    (`render()` included); `hud=False` draws no HUD. Other sizes and the exact layout: `docs/SPEC.md`.
 
     ## Rewards
     +1 for every step; −10 for a step in which a bird (or alien, or missile) hits the chopper. With
@@ -91,7 +104,8 @@ class ChopperScapeEnv(gym.Env):
     | `obs_type` | `"rgb"` | `"rgb"`, `"rgb_float"`, `"grayscale"`, `"features"` |
     | `obs_size` | `(600, 800)` | `(H, W)`, each in 8..=4096 |
     | `frame_stack` | 1 | 1..=64 |
-    | `hud` | `True` | draw the HUD line into pixel observations |
+    | `hud` | `True` | draw the HUD (fuel and lives, see above) into pixel observations |
+    | `hud_style` | `"auto"` | `"auto"` (text in frames of at least 300 × 400, bars below), `"text"`, `"gauge"`; `render()` shows the text unless `"gauge"` |
     | `keep_dim` | `False` | give `"grayscale"` without stacking a channel axis, `(H, W, 1)` instead of `(H, W)` (what CNN policies such as SB3's `CnnPolicy` expect; a view, no copy) |
     | `lives` | 1 | 1..=1000 |
     | `bird_fuel_collision` | `"pass"` | `"pass"`, `"destroy"` |
@@ -278,3 +292,12 @@ def restore_state(env: gym.Env, state: bytes) -> None:
         if isinstance(layer, TimeLimit):
             layer._elapsed_steps = steps
         layer = layer.env
+
+
+def make_env(max_episode_steps: int | None = 10_000, **options: Any) -> gym.Env:
+    """`gymnasium.make("ChopperScape-v0", **options)` truncated at `max_episode_steps`, where `None` means no time
+    limit at all (`gymnasium.make`'s own `max_episode_steps=None` falls back to the registered 10,000): the env's
+    spec then says `max_episode_steps=None` too, so a Minari dataset recovers the same env."""
+    limit = time_limit(max_episode_steps)
+    spec = dataclasses.replace(gym.spec("ChopperScape-v0"), max_episode_steps=limit)
+    return gym.make(spec, **options)

@@ -3,11 +3,19 @@
     python -m chopperscape.evaluate MODEL --episodes 100 --seed 1000000
 
 `MODEL` is a file written by ``python -m chopperscape.train`` (``model.pt``), a Stable-Baselines3 ``.zip`` (then
-give the env options it was trained with: ``--option obs_type='"features"'``; a ``vecnormalize.pkl`` beside it
-normalises the observations as in training), or the name of a built-in pilot
-(``random``, ``heuristic``, ``noop``…, see ``chopperscape.pilots``), so that baselines come from the same seeds. Episode ``k`` is played on seed
-``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or to the 10,000-step truncation,
-with the greedy action (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
+give the env options it was trained with: ``--option obs_type=features``; a ``vecnormalize.json`` beside it, from
+``chopperscape.sb3.save_normalization``, normalises the observations as in training), or the name of a built-in
+pilot (``random``, ``heuristic``, ``noop``…, see ``chopperscape.pilots``), so that baselines come from the same
+seeds; a file named like a pilot is given as ``./NAME``.
+
+Loading a model never runs code from it: a recipe model is read with ``torch.load(weights_only=True)`` (tensors
+and plain data), and the pickled parts of an SB3 ``.zip`` are replaced by what the env gives. Pickles (SB3's
+``vecnormalize.pkl``, an SB3 model whose settings cannot be rebuilt) are refused unless ``--trust-pickle``: give it
+only for files whose author you trust.
+
+Episode ``k`` is played on seed ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or
+to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``), with the greedy action
+(``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
 
     {"model": ..., "episodes": 100, "seed": 1000000, "mean_return": ..., "std_return": ..., "min_return": ...,
      "max_return": ..., "mean_steps": ..., "causes": {"bird": 0.62, "fuel": 0.08, "truncated": 0.30}, ...}
@@ -25,7 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ._cli import env_options
+from ._cli import env_options, print_line
 from .vector import VectorEnv
 
 #: Most environments stepped together while evaluating (bounded memory, whatever `--episodes`).
@@ -102,52 +110,67 @@ class _PilotPlayer:
         return self.pilot.act(envs)
 
 
-def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, Any]):
-    """`(act, env_options)` for a model file (a recipe `model.pt`, a Stable-Baselines3 `.zip`) or a pilot name."""
+#: `--option` names evaluation does not take, and why.
+REFUSED_OPTIONS = {
+    "num_threads": "evaluation steps its own batch on one thread (results do not depend on threads)",
+    "autoreset_mode": "evaluation plays each episode once to its end; it needs no autoreset mode",
+    "copy": "evaluation reads each step's arrays itself; it takes no `copy`",
+    "render_mode": "evaluation draws nothing; record a video with `chopperscape record` instead",
+}
+
+
+def _observation_shape(options: dict[str, Any]) -> tuple[int, ...]:
+    """The observation shape of one env with `options` (a `ValueError` naming a bad option)."""
+    envs = VectorEnv(1, num_threads=1, max_episode_steps=None, **options)
+    try:
+        return tuple(envs.single_observation_space.shape)
+    finally:
+        envs.close()
+
+
+def load_policy(model: str | Path, stochastic: bool, seed: int, env_options: dict[str, Any],
+                trust_pickle: bool = False):
+    """`(act, env_options)` for a model file (a recipe `model.pt`, a Stable-Baselines3 `.zip`) or a pilot name.
+
+    A bare pilot name (`"random"`, a `str`) is always the pilot; a file of that name is read as `./random` (or a
+    `Path`). Loading never runs code from the file (see `load_recipe`, `load_sb3`) unless `trust_pickle`."""
     from .pilots import NAMES
 
-    if not path.exists() and str(path) in NAMES:
-        return _PilotPlayer(str(path)), {"obs_type": "features", **env_options}
+    if isinstance(model, str) and model in NAMES:
+        return _PilotPlayer(model), {"obs_type": "features", **env_options}
+    path = Path(model)
     if not path.is_file():
         raise ValueError(
             f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.train, an SB3 .zip, "
             f"or a pilot name: {', '.join(NAMES)})"
         )
     if path.suffix == ".zip":
-        from stable_baselines3 import PPO
+        return load_sb3(path, stochastic, env_options, trust_pickle)
+    return load_recipe(path, stochastic, seed, env_options)
 
-        model = PPO.load(path, device="cpu")
-        # A VecNormalize saved beside the model (as `python/examples/sb3_ppo.py --tuned` does) normalises its inputs.
-        stats = path.with_name("vecnormalize.pkl")
-        if stats.is_file():
-            import pickle
 
-            with open(stats, "rb") as f:
-                norm = pickle.load(f)
-            norm.training = False
-            return (lambda obs, envs: model.predict(norm.normalize_obs(obs), deterministic=not stochastic)[0]), env_options
-        return (lambda obs, envs: model.predict(obs, deterministic=not stochastic)[0]), env_options
+def load_recipe(path: Path, stochastic: bool, seed: int, env_options: dict[str, Any]):
+    """`(act, env_options)` for a `chopperscape.train` model. Read with `torch.load(weights_only=True)`: tensors
+    and plain data only, so a crafted file cannot run code; its fields are then checked one by one."""
     import torch
-
-    from .train import Agent, ObsNormalizer, RunningMeanStd
 
     # One thread: a small MLP gains nothing from more, and OpenMP spinning under load can slow it by 100x.
     torch.set_num_threads(1)
-
+    what = f"model file {str(path)!r}"
     try:
-        payload = torch.load(path, map_location="cpu", weights_only=False)
-    except Exception as err:
-        raise ValueError(f"model file {str(path)!r} is not a chopperscape.train model: {err}") from None
-    if not isinstance(payload, dict) or payload.get("format") != "chopperscape-ppo/1":
-        raise ValueError(f"model file {str(path)!r} is not a chopperscape.train model (format chopperscape-ppo/1)")
-    recipe = payload["recipe"]
-    agent = Agent(payload["obs_dim"], payload["num_actions"], recipe["hidden"])
-    agent.actor.load_state_dict(payload["actor"])
-    agent.critic.load_state_dict(payload["critic"])
-    agent.eval()
-    norm = ObsNormalizer((payload["obs_dim"],), payload["obs_rms"] is not None)
-    if payload["obs_rms"] is not None:
-        norm.rms = RunningMeanStd.from_state(payload["obs_rms"])
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
+        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        raise ValueError(f"{what} is not a chopperscape.train model (it holds more than tensors and plain data, "
+                         f"or is damaged): {first}") from None
+    agent, model_shape, norm, recipe = _recipe_from(payload, what)
+    options = {"obs_type": recipe["obs_type"], **recipe["env_options"], **env_options}
+    shape = _observation_shape(options)
+    if shape != model_shape:
+        raise ValueError(
+            f"{what} takes observations of shape {model_shape}, but these env options give observations of shape "
+            f"{shape} ({_describe(options)}): evaluate it with the options it was trained with"
+        )
     gen = torch.Generator().manual_seed(seed)
 
     def act(obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
@@ -157,38 +180,108 @@ def load_policy(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
                 return torch.multinomial(logits.softmax(-1), 1, generator=gen).squeeze(-1).numpy()
             return logits.argmax(-1).numpy()
 
-    options = {"obs_type": recipe["obs_type"], **recipe["env_options"], **env_options}
     return act, options
+
+
+def _describe(options: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v!r}" for k, v in options.items()) or "the defaults"
+
+
+def _recipe_from(payload: Any, what: str):
+    """The agent, observation shape, normaliser and recipe of a loaded payload; `ValueError` naming the first
+    field that is missing or of the wrong kind (the checks are `train.agent_from_checkpoint`'s)."""
+    from .train import ObsNormalizer, RunningMeanStd, agent_from_checkpoint
+
+    agent = agent_from_checkpoint(payload, what)
+    recipe, shape = payload["recipe"], tuple(payload.get("obs_shape") or (payload["obs_dim"],))
+    rms = payload.get("obs_rms")
+    norm = ObsNormalizer(shape, rms is not None)
+    if rms is not None:
+        try:
+            norm.rms = RunningMeanStd.from_state(rms)
+            ok = norm.rms.mean.shape == shape and norm.rms.var.shape == shape
+        except (KeyError, TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"{what} is not a usable chopperscape.train model: `obs_rms` must hold a mean and a "
+                             f"variance of shape {shape}")
+    return agent, shape, norm, recipe
+
+
+def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pickle: bool = False):
+    """`(act, env_options)` for a Stable-Baselines3 PPO `.zip`, with the observation normalisation saved beside it.
+
+    SB3 stores the model's settings as JSON, but some of them (the spaces, the policy class, schedules) as
+    cloudpickle, which runs code when loaded; its weights are read with `weights_only=True`. Unless
+    `trust_pickle`, no pickle is loaded: every pickled setting is replaced by what this env and SB3's own
+    classes give (named by the readable copy SB3 stores beside it), and a setting that cannot be is refused.
+    Normalisation: `vecnormalize.json` (`chopperscape.sb3.save_normalization`) is read as data; SB3's
+    `vecnormalize.pkl` is a pickle, read only with `trust_pickle`."""
+    from stable_baselines3 import PPO
+
+    from . import sb3
+
+    what = f"model file {str(path)!r}"
+    # As the adapter gives them (`ChopperScapeVecEnv(keep_dim=True)`): grayscale with a channel axis.
+    env_options = {"keep_dim": True, **env_options}
+    shape = _observation_shape(env_options)
+    if trust_pickle:
+        model = PPO.load(path, device="cpu")
+    else:
+        custom = sb3.safe_load_objects(path, env_options)
+        try:
+            model = PPO.load(path, device="cpu", custom_objects=custom)
+        except (RuntimeError, KeyError, TypeError, AttributeError) as e:
+            raise ValueError(f"{what} could not be read without unpickling ({str(e).splitlines()[0]}); pass "
+                             "--trust-pickle if you trust who made it") from None
+    model_shape = tuple(model.observation_space.shape or ())
+    if model_shape != shape:
+        raise ValueError(f"{what} takes observations of shape {model_shape}, but these env options give {shape} "
+                         f"({_describe(env_options)}): give the options it was trained with (--option ...)")
+    norm = sb3.load_normalization(path.parent, trust_pickle)
+
+    def act(obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
+        return model.predict(obs if norm is None else norm(obs), deterministic=not stochastic)[0]
+
+    return act, env_options
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m chopperscape.evaluate", description=__doc__.splitlines()[0])
-    p.add_argument("model", type=Path, help="model.pt from chopperscape.train, an SB3 .zip, or a pilot name")
+    p.add_argument("model", help="model.pt from chopperscape.train, an SB3 .zip, or a pilot name (a file named like "
+                                 "a pilot: ./NAME)")
     p.add_argument("--episodes", type=int, default=100, help="episodes to play (default 100)")
     p.add_argument("--seed", type=int, default=1_000_000, help="first seed (default 1000000, held out from training)")
     p.add_argument("--stochastic", action="store_true", help="sample actions instead of taking the greedy one")
-    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option (JSON value)")
+    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                   help="env option, as the command line's flags take it (obs_size=84x84, hud=false, "
+                        "max_episode_steps=none)")
     p.add_argument("--per-episode", action="store_true", help="also list every episode")
+    p.add_argument("--trust-pickle", action="store_true",
+                   help="allow pickled parts of an SB3 .zip and a vecnormalize.pkl beside it: pickles run code when "
+                        "loaded, so only for files whose author you trust")
     a = p.parse_args(argv)
     if a.episodes < 1:
         p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
     if not 0 <= a.seed < 2**63:
         p.error(f"--seed {a.seed}: allowed 0 <= seed < 2**63")
-    options = env_options(p, a.option)
+    options = env_options(p, a.option, refused=REFUSED_OPTIONS)
+    limit = options.pop("max_episode_steps", 10_000)
     try:
-        act, play_options = load_policy(a.model, a.stochastic, a.seed, options)
-        results = play_episodes(act, a.episodes, a.seed, play_options)
+        act, play_options = load_policy(a.model, a.stochastic, a.seed, options, trust_pickle=a.trust_pickle)
+        results = play_episodes(act, a.episodes, a.seed, play_options, max_episode_steps=limit)
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
     if not isinstance(act, _PilotPlayer):
         out["greedy"] = not a.stochastic
+    if limit != 10_000:
+        out["max_episode_steps"] = limit
     out.update(summary(results))
     if a.per_episode:
         out["per_episode"] = results
-    print(json.dumps(out))
-    return 0
+    return print_line(json.dumps(out))
 
 
 if __name__ == "__main__":

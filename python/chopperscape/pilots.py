@@ -32,7 +32,8 @@ import gymnasium as gym
 import numpy as np
 
 from . import _core
-from .env import ChopperScapeEnv
+from ._checks import pilot_seed, positive_int
+from .env import ChopperScapeEnv, make_env
 from .vector import VectorEnv
 
 __all__ = [
@@ -57,9 +58,7 @@ def _check_name(name: str) -> None:
 
 
 def _check_seed(seed: int) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
-        raise ValueError(f"invalid seed {seed!r}: allowed an integer in [0, 2**64)")
-    return int(seed)
+    return pilot_seed(seed)
 
 
 def _single(env: Any) -> _core.Env:
@@ -112,9 +111,9 @@ class VectorPilot:
 
     def __init__(self, name: str, num_envs: int, seed: int = 0):
         _check_name(name)
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"invalid value {num_envs!r} for option `num_envs`: allowed an integer >= 1")
-        self._core = _core.VectorPilot(name, int(num_envs), _check_seed(seed))
+        # Within `usize`; the batch's memory budget (as `VectorEnv`'s) is checked in Rust before allocating.
+        num_envs = positive_int("num_envs", num_envs, maximum=2**64 - 1)
+        self._core = _core.VectorPilot(name, num_envs, _check_seed(seed))
 
     @property
     def name(self) -> str:
@@ -175,12 +174,18 @@ def episodes(
     """Plays `n` episodes of pilot `name` exactly as `chopperscape demo --policy NAME --episodes N --seed S
     --json` does (episode `i` from seed `S + i`, the pilot restarted with that seed) and yields what it prints:
     `{"episode", "seed", "steps", "return", "cause"}`, plus `"actions"` (the list of actions taken).
-    `options` are the env's keyword options (`frame_skip=4`, `lives=3`, ...)."""
+    `options` are the env's keyword options (`frame_skip=4`, `lives=3`, ...); `max_episode_steps=None` plays
+    without a time limit. The arguments are checked at once (`ValueError`), before the first episode."""
     seed = _check_seed(seed)
+    n = positive_int("n", n)
     pilot = Pilot(name, seed)
-    env = gym.make("ChopperScape-v0", max_episode_steps=max_episode_steps, **{**options, "obs_type": "features"})
+    env = make_env(max_episode_steps, **{**options, "obs_type": "features"})
+    return _play(pilot, env, n, seed)
+
+
+def _play(pilot: Pilot, env: gym.Env, n: int, seed: int) -> Iterator[dict[str, Any]]:
     try:
-        for i in range(int(n)):
+        for i in range(n):
             s = (seed + i) % 2**64
             pilot.reset(s)
             env.reset(seed=s)

@@ -27,6 +27,10 @@ def read(path: Path) -> dict[str, list[float]]:
     missing = [c for c in COLUMNS if c not in rows[0]]
     if missing:
         raise ValueError(f"{path}: missing columns {missing} (expected {','.join(COLUMNS)})")
+    # Rows before the first finished episode have no returns yet (chopperscape.train writes every update).
+    rows = [r for r in rows if r["mean_return"] != ""]
+    if not rows:
+        raise ValueError(f"{path}: no finished episode yet")
     return {c: [float(r[c]) for r in rows] for c in COLUMNS}
 
 

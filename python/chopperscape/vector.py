@@ -11,7 +11,8 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from . import _core
-from ._spaces import batched_box, channel_axis, check_bool, check_reset_options, core_seed, observation_box
+from ._checks import check_bool, check_reset_options, core_seed, positive_int, time_limit
+from ._spaces import batched_box, channel_axis, observation_box
 
 _CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
 
@@ -68,12 +69,10 @@ class VectorEnv(gym.vector.VectorEnv):
         keep_dim: bool = False,
         **options: Any,
     ):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"invalid value {num_envs!r} for option `num_envs`: allowed an integer >= 1")
+        num_envs = positive_int("num_envs", num_envs)
         if num_threads is None:
-            num_threads = default_threads(int(num_envs))
-        if isinstance(num_threads, bool) or not isinstance(num_threads, (int, np.integer)) or num_threads < 1:
-            raise ValueError(f"invalid value {num_threads!r} for option `num_threads`: allowed an integer >= 1")
+            num_threads = default_threads(num_envs)
+        num_threads = positive_int("num_threads", num_threads)
         try:
             autoreset_mode = AutoresetMode(autoreset_mode)
         except ValueError:
@@ -85,13 +84,7 @@ class VectorEnv(gym.vector.VectorEnv):
         copy = check_bool("copy", copy)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"invalid value {render_mode!r} for option `render_mode`: allowed None, 'rgb_array'")
-        if max_episode_steps is not None and (
-            isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, (int, np.integer))
-            or max_episode_steps < 1
-        ):
-            raise ValueError(
-                f"invalid value {max_episode_steps!r} for option `max_episode_steps`: allowed a positive integer or None"
-            )
+        max_episode_steps = time_limit(max_episode_steps)
         self._core_args = (
             int(num_envs),
             int(num_threads),
@@ -115,9 +108,9 @@ class VectorEnv(gym.vector.VectorEnv):
         self.single_action_space = spaces.Discrete(len(_core.ACTION_MEANINGS))
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._stream_started = False
-        # Every environment has fuel and lives every step: one shared, read-only all-true mask.
-        self._all = np.ones(self.num_envs, dtype=np.bool_)
-        self._all.flags.writeable = False
+        # Every environment has fuel and lives every step: one shared all-true mask, read-only for good (its
+        # memory is a bytes object, so numpy refuses to make it writable again).
+        self._all = np.frombuffer(b"\x01" * self.num_envs, dtype=np.bool_)
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -228,6 +221,7 @@ class VectorEnv(gym.vector.VectorEnv):
         self.__dict__.update(state)
         self._core = _core.VectorEnv(*self._core_args)
         self._core.set_state(*core_state)
+        self._all = np.frombuffer(b"\x01" * self.num_envs, dtype=np.bool_)
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """`render_mode="rgb_array"`: one 600 × 800 × 3 frame per environment."""
@@ -242,6 +236,10 @@ class VectorEnv(gym.vector.VectorEnv):
 
     def env_state(self, i: int) -> bytes:
         """Environment `i`'s whole state as bytes: `ChopperScapeEnv.restore_state` reads them."""
+        return self._core.snapshot(self.env_index(i))
+
+    def env_index(self, i: Any) -> int:
+        """`i` as the index of one of the environments, or `IndexError` naming the range."""
         if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) or not 0 <= i < self.num_envs:
             raise IndexError(f"environment {i!r} does not exist: allowed 0..={self.num_envs - 1}")
-        return self._core.snapshot(int(i))
+        return int(i)

@@ -4,8 +4,10 @@
     python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
 
 `--tuned` uses what ``chopperscape.train`` uses (γ = 0.999, 64 envs × 256 steps, entropy 0.01, [128, 128] tanh,
-observations and rewards normalised by ``VecNormalize``). The model is saved as ``OUT/model.zip`` (and
-``OUT/vecnormalize.pkl`` with ``--tuned``); ``progress.csv`` has the columns
+observations and rewards normalised by ``VecNormalize``). The model is saved as ``OUT/model.zip`` (and, with
+``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
+``python -m chopperscape.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
+training with ``VecNormalize.load``); ``progress.csv`` has the columns
 ``env_steps,wall_s,episodes,mean_return,std_return,mean_length``, drawn by ``python -m chopperscape.plot``.
 """
 
@@ -22,7 +24,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from chopperscape.sb3 import ChopperScapeVecEnv
+from chopperscape.sb3 import ChopperScapeVecEnv, save_normalization
 
 
 class ProgressCsv(BaseCallback):
@@ -76,6 +78,7 @@ def main() -> None:
     model.learn(10**10, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
     model.save(a.out / "model.zip")
     if a.tuned:
+        save_normalization(env, a.out / "vecnormalize.json")
         env.save(str(a.out / "vecnormalize.pkl"))
 
 

@@ -147,8 +147,8 @@ def test_every_spec_option_is_a_make_keyword_with_its_effect():
     assert info["fuel"] == 48, "frame_skip=2 burns two units a step"
     assert env.render().shape == (600, 800, 3)
     assert set(chopperscape.OPTION_NAMES) == {
-        "obs_type", "obs_size", "frame_stack", "hud", "lives", "alien_prob", "bird_fuel_collision", "frame_skip",
-        "sticky_prob", "bird_prob", "fuel_prob", "max_fuel", "render_mode",
+        "obs_type", "obs_size", "frame_stack", "hud", "hud_style", "lives", "alien_prob", "bird_fuel_collision",
+        "frame_skip", "sticky_prob", "bird_prob", "fuel_prob", "max_fuel", "render_mode",
     }
 
 
@@ -156,6 +156,7 @@ def test_every_spec_option_is_a_make_keyword_with_its_effect():
     "option, value",
     [
         ("obs_type", "rgba"), ("obs_size", (4, 4)), ("obs_size", "big"), ("frame_stack", 0), ("hud", "maybe"),
+        ("hud_style", "bars"), ("hud_style", True),
         ("lives", 0), ("lives", 2.5), ("alien_prob", 1.5), ("bird_fuel_collision", "explode"), ("frame_skip", 0),
         ("sticky_prob", -0.1), ("bird_prob", float("nan")), ("fuel_prob", 2), ("max_fuel", 0),
         ("render_mode", "ascii"), ("gravity", 9.8),

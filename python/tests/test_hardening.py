@@ -10,6 +10,7 @@ import subprocess
 import sys
 import textwrap
 import threading
+import time
 import zlib
 
 import gymnasium as gym
@@ -21,8 +22,8 @@ from chopperscape import ChopperScapeEnv, VectorEnv, _core
 
 from conftest import SHORT
 
-# Payload offsets of snapshot format version 1 (crates/core/src/snapshot.rs).
-OBS_TYPE, OBS_H, OBS_W, FRAME_STACK, RETURN, STEPS, HEADER = 0, 1, 5, 9, 108, 120, 10
+# Payload offsets of snapshot format version 2 (crates/core/src/snapshot.rs).
+OBS_TYPE, OBS_H, OBS_W, FRAME_STACK, RETURN, STEPS, HEADER = 0, 1, 5, 9, 109, 121, 10
 
 
 def tamper(state: bytes, **fields: bytes) -> bytes:
@@ -216,7 +217,7 @@ def test_copy_false_arrays_are_read_only_and_copy_true_arrays_are_yours():
             assert not array.flags.writeable
             with pytest.raises(ValueError, match="read-only"):
                 array[...] = 0
-        assert envs.step(np.array([0, 1]))[0] is obs
+        assert np.shares_memory(envs.step(np.array([0, 1]))[0], obs), "copy=False: the same arrays every call"
     fresh = VectorEnv(2, copy=True, **SHORT)
     obs, _ = fresh.reset(seed=0)
     assert obs.flags.writeable
@@ -342,3 +343,102 @@ def test_two_threads_on_one_env_get_a_message_that_says_so():
         stop.set()
         worker.join()
     assert errors and "cannot be used from two threads at once" in errors[0], errors
+
+
+# --- pilots and copy=False arrays (hardening, round two) --------------------------------------------------
+
+
+def test_vector_pilot_sizes_are_checked_against_the_batch_budget_before_allocating():
+    from chopperscape import pilots
+
+    for bad in (0, -1, 2**64, 1.5, "8", True):
+        with pytest.raises(ValueError, match="num_envs"):
+            pilots.VectorPilot("heuristic", bad)
+    # In a process with 1 GiB of address space: without the budget, these sizes took the machine's memory or
+    # aborted the interpreter.
+    code = textwrap.dedent(
+        """
+        import resource
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        from chopperscape import pilots
+        for n in (2**62, 2**64 - 1, 10**8, 10**7):
+            try:
+                pilots.VectorPilot("heuristic", n)
+            except (ValueError, MemoryError) as e:
+                print("refused:", e)
+        """
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    lines = out.stdout.splitlines()
+    assert len(lines) == 4 and all(line.startswith("refused:") for line in lines), out.stdout
+    assert all("budget of 16.0 GiB" in line for line in lines[:3]) and "could not allocate" in lines[3], out.stdout
+
+
+@pytest.mark.parametrize("n", [-1, 0, 2.5, "3", None, True])
+def test_pilot_episodes_checks_its_arguments_at_once(n):
+    from chopperscape import pilots
+
+    with pytest.raises(ValueError, match="`n`"):
+        pilots.episodes("random", n)
+    with pytest.raises(ValueError, match="seed"):
+        pilots.episodes("random", 1, seed=-1)
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        pilots.episodes("random", 1, max_episode_steps=0)
+
+
+def _busy(step, stop):
+    def run():
+        while not stop.is_set():
+            try:
+                step()
+            except RuntimeError:
+                pass
+
+    return threading.Thread(target=run)
+
+
+def test_a_pilot_on_an_env_another_thread_steps_gets_the_two_threads_message():
+    from chopperscape import pilots
+
+    core = _core.Env({"obs_size": (1024, 1024), "frame_stack": 4, "bird_prob": 0.0, "max_fuel": 1000000})
+    core.reset(0)
+    envs = VectorEnv(4, obs_size=(512, 512), frame_stack=2, bird_prob=0.0, max_fuel=1000000, max_episode_steps=None)
+    envs.reset(seed=0)
+    for act, step in [(lambda: pilots.Pilot("heuristic").act(core), lambda: core.step(4)),
+                      (lambda: pilots.VectorPilot("heuristic", 4).act(envs), lambda: envs.step(np.full(4, 4)))]:
+        stop = threading.Event()
+        worker = _busy(step, stop)
+        worker.start()
+        errors = []
+        try:
+            for _ in range(20000):
+                time.sleep(0.0002)  # lets the other thread into a step (the pilot holds the env while it plans)
+                try:
+                    act()
+                except RuntimeError as e:
+                    errors.append(str(e))
+                    break
+        finally:
+            stop.set()
+            worker.join()
+        assert errors and "cannot be used from two threads at once" in errors[0], errors
+
+
+def test_copy_false_arrays_cannot_be_made_writable_again():
+    for autoreset in ["NextStep", "SameStep"]:
+        envs = VectorEnv(2, copy=False, autoreset_mode=autoreset, keep_dim=True, obs_type="grayscale",
+                         obs_size=(16, 16), max_fuel=5)
+        obs, info = envs.reset(seed=0)
+        before = obs.copy()
+        outputs = [obs, *envs.step(np.array([0, 1]))[:4], info["fuel"], info["lives"], info["_fuel"], info["_lives"]]
+        for array in outputs:
+            chain = array
+            while isinstance(chain, np.ndarray):
+                with pytest.raises(ValueError):
+                    chain.flags.writeable = True
+                chain = chain.base
+        # The frames the batch draws incrementally are as a fresh env draws them.
+        fresh = VectorEnv(2, copy=True, keep_dim=True, obs_type="grayscale", obs_size=(16, 16), max_fuel=5)
+        assert np.array_equal(fresh.reset(seed=0)[0], before)
+        assert np.shares_memory(envs.step(np.array([0, 1]))[0], obs), "copy=False: the same arrays every call"

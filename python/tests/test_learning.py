@@ -29,13 +29,13 @@ needs_sb3 = pytest.mark.skipif(
 def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     from chopperscape import evaluate, train
 
-    recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 200}, hidden=32)
-    path = train.train(recipe, tmp_path, minutes=None, total_steps=3000)
+    recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 200}, hidden=32, total_steps=3000)
+    path = train.train(recipe, tmp_path)
     rows = (tmp_path / "progress.csv").read_text().splitlines()
     assert rows[0] == ",".join(train.CSV_COLUMNS)
     last = dict(zip(train.CSV_COLUMNS, rows[-1].split(",")))
     assert int(last["env_steps"]) >= 3000 and int(last["episodes"]) > 0
-    assert all(math.isfinite(float(v)) for v in last.values())
+    assert all(math.isfinite(float(v)) for v in last.values() if v != "")
     # The checkpoint reloads into the same policy: evaluation is reproducible and uses the training options.
     assert evaluate.main([str(path), "--episodes", "3", "--seed", "77"]) == 0
     first = json.loads(capsys.readouterr().out)
@@ -46,6 +46,155 @@ def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     assert [e["seed"] for e in second["per_episode"]] == [77, 78, 79]
     # max_fuel=200 came from the model: no episode outlives its fuel without a tank.
     assert all(e["steps"] <= 200 or e["return"] > 0 for e in second["per_episode"])
+
+
+def _progress(path):
+    import csv
+
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+@needs_torch
+def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_path):
+    from chopperscape import train
+
+    def run(name, **kw):
+        recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000,
+                              **kw)
+        train.train(recipe, tmp_path / name)
+        return _progress(tmp_path / name / "progress.csv")
+
+    first, second = run("a"), run("b")
+    assert len(first) >= 5
+    # Identical apart from the time column: same seed and budget, same curve, whatever the host's load.
+    drop = [{k: v for k, v in r.items() if k != "wall_s"} for r in first]
+    assert drop == [{k: v for k, v in r.items() if k != "wall_s"} for r in second]
+    # The learning rate anneals linearly over the step budget from the start: lr = 3e-4 * (1 - steps / budget).
+    lrs = [float(r["learning_rate"]) for r in first]
+    assert lrs == sorted(lrs, reverse=True) and lrs[0] == 3e-4 and lrs[-1] < 1e-4
+    steps_before = [0] + [int(r["env_steps"]) for r in first[:-1]]
+    for r, before in zip(first, steps_before):
+        assert float(r["learning_rate"]) == pytest.approx(3e-4 * max(1 - before / 6000, 0.05), rel=1e-4)
+    # Another seed is another run.
+    assert [r["mean_return"] for r in run("c", seed=1)] != [r["mean_return"] for r in first]
+
+
+@needs_torch
+def test_progress_diagnostics_are_sane(tmp_path):
+    from chopperscape import train
+
+    recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 100}, hidden=16, total_steps=4000)
+    train.train(recipe, tmp_path)
+    rows = _progress(tmp_path / "progress.csv")
+    for r in rows:
+        # Entropy of a 5-action policy lies in [0, ln 5]; the fresh policy is nearly uniform.
+        assert 0 <= float(r["entropy"]) <= math.log(5) + 1e-6
+        assert 0 <= float(r["clip_frac"]) <= 1 and float(r["approx_kl"]) >= -1e-6
+        assert float(r["explained_var"]) <= 1 and float(r["value_loss"]) >= 0
+        if int(r["ended"]):
+            assert r["mean_return"] != ""
+            shares = [float(r[k]) for k in ("bird", "fuel", "limit")]
+            assert sum(shares) == pytest.approx(1, abs=0.002)
+    assert float(rows[0]["entropy"]) > 0.95 * math.log(5)
+    # With 100 fuel and a policy that cannot yet refuel, fuel ends most episodes; no episode reaches 10,000 steps.
+    ended = sum(int(r["ended"]) for r in rows)
+    fuel = sum(float(r["fuel"]) * int(r["ended"]) for r in rows if int(r["ended"]))
+    assert ended == int(rows[-1]["episodes"]) and fuel / ended > 0.3
+    assert all(float(r["limit"] or 0) == 0 for r in rows)
+
+
+@needs_torch
+def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
+    import chopperscape
+    from chopperscape import evaluate, train
+
+    # The pixel preset at a smoke size: small frames, few envs; the same code path as the full recipe.
+    out = tmp_path / "px"
+    assert train.main(["--preset", "pixels", "--steps", "1200", "--num-envs", "8", "--num-steps", "32", "--out", str(out),
+                "--option", "obs_size=42x42", "--option", "max_fuel=300"]) == 0
+    capsys.readouterr()
+    recipe = json.loads((out / "recipe.json").read_text())
+    assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.996
+    assert recipe["env_options"] == {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4, "max_fuel": 300}
+    rows = _progress(out / "progress.csv")
+    assert rows and all(math.isfinite(float(r[k])) for r in rows for k in ("entropy", "value_loss", "policy_loss"))
+    import torch
+
+    payload = torch.load(out / "model.pt", weights_only=True)
+    assert payload["obs_shape"] == [42, 42, 4] and payload["pixels_version"] == chopperscape.PIXELS_VERSION
+    # A model of another pixel layout is refused, naming both versions.
+    with pytest.raises(ValueError, match=f"pixel layout v1, and this chopperscape draws v{chopperscape.PIXELS_VERSION}"):
+        train.agent_from_checkpoint({**payload, "pixels_version": 1})
+    agent = train.agent_from_checkpoint(payload)
+    assert isinstance(agent, train.CnnAgent)
+    # The frame skip, stack and size came back from the model: evaluation plays the frames it was trained on.
+    assert evaluate.main([str(out / "model.pt"), "--episodes", "2", "--seed", "9", "--per-episode"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["episodes"] == 2 and all(e["return"] % 4 == 0 or e["cause"] == "bird" for e in res["per_episode"])
+    # Reloading gives the same greedy actions on the same frames.
+    env_obs = np.random.default_rng(0).integers(0, 256, (3, 42, 42, 4), dtype=np.uint8)
+    again = train.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
+    with torch.no_grad():
+        assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
+
+
+def test_networks_refuse_observations_they_cannot_take():
+    pytest.importorskip("torch")
+    from chopperscape import train
+
+    with pytest.raises(ValueError, match="mlp network takes vector observations"):
+        train.build_agent("mlp", (84, 84, 4))
+    with pytest.raises(ValueError, match="takes grayscale frames"):
+        train.build_agent("small", (46,))
+    with pytest.raises(ValueError, match="too small"):
+        train.build_agent("nature", (16, 16, 4))
+    with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature'"):
+        train.build_agent("resnet", (84, 84, 4))
+
+
+def test_iqm_and_bootstrap_match_their_definitions():
+    from chopperscape.seeds import bootstrap_ci, iqm, parse_seeds
+
+    assert parse_seeds("0-3,7, 2") == [0, 1, 2, 3, 7] and parse_seeds("1,0,2-3") == [1, 0, 2, 3]
+    for bad in ("", "a", "3-1", "-1", "0-5000"):
+        with pytest.raises(ValueError, match="--seeds"):
+            parse_seeds(bad)
+    x = np.array([100.0, 1, 2, 3, 4, 5, 6, 7, 8, -50])
+    # scipy.stats.trim_mean(x, 0.25): drop int(0.25 * 10) = 2 from each end.
+    assert iqm(x) == pytest.approx(np.mean([2, 3, 4, 5, 6, 7]))
+    assert iqm(np.arange(8.0)) == pytest.approx(np.mean([2, 3, 4, 5]))
+    lo, hi = bootstrap_ci(x, resamples=4000)
+    assert lo < iqm(x) < hi and lo >= -50 and hi <= 100
+    assert bootstrap_ci(x, resamples=4000) == (lo, hi)  # seeded: a summary is reproducible
+    assert bootstrap_ci(np.full(6, 7.0), resamples=100) == (7.0, 7.0)
+    # Curves: points along the first axis are bootstrapped together, one interval per point.
+    lo2, hi2 = bootstrap_ci(np.stack([x, x + 10]), resamples=4000)
+    assert np.allclose(lo2, [lo, lo + 10]) and np.allclose(hi2, [hi, hi + 10])
+
+
+@needs_torch
+def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, capsys):
+    from chopperscape import train
+
+    out = tmp_path / "bench"
+    args = ["--seeds", "0-1", "--steps", "2000", "--out", str(out), "--eval-episodes", "3", "--jobs", "2",
+            "--num-envs", "8", "--num-steps", "64", "--hidden", "16", "--option", "max_fuel=150"]
+    assert train.main(args) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["seeds"] == [0, 1] and set(summary["per_seed"]) == {"0", "1"}
+    means = [summary["per_seed"][s]["mean_return"] for s in ("0", "1")]
+    lo, hi = summary["iqm_ci95"]
+    assert lo <= summary["iqm"] <= hi and min(means) <= lo and hi <= max(means)
+    assert summary["eval"] == {"episodes": 3, "seed": 1_000_000}
+    assert set(summary["baselines"]) == {"random", "heuristic"}
+    # The options reached training and every evaluation: max_fuel 150 bounds the pilots' episodes without tanks.
+    assert json.loads((out / "seed-1" / "recipe.json").read_text())["env_options"] == {"max_fuel": 150}
+    assert "IQM" in (out / "summary.md").read_text() and "| 1 |" in (out / "summary.md").read_text()
+    # Run again: every seed is already evaluated with these settings, so nothing is retrained.
+    stamp = (out / "seed-0" / "model.pt").stat().st_mtime_ns
+    assert train.main(args) == 0 and (out / "seed-0" / "model.pt").stat().st_mtime_ns == stamp
+    assert json.loads((out / "summary.json").read_text()) == summary
 
 
 def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
@@ -161,7 +310,7 @@ def test_sb3_cnn_policy_accepts_grayscale_with_a_channel_axis():
 
     from chopperscape.sb3 import ChopperScapeVecEnv
 
-    env = ChopperScapeVecEnv(2, seed=0, obs_type="grayscale", obs_size=(84, 84), hud=False, max_fuel=100)
+    env = ChopperScapeVecEnv(2, seed=0, obs_type="grayscale", obs_size=(84, 84), max_fuel=100)
     assert env.observation_space.shape == (84, 84, 1)
     model = PPO("CnnPolicy", env, n_steps=32, batch_size=32, n_epochs=1, device="cpu")
     model.learn(64)
@@ -212,7 +361,7 @@ def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
 
 @pytest.mark.parametrize("mode", ["NEXT_STEP", "SAME_STEP"])
 def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
-    options = dict(obs_type="grayscale", obs_size=(84, 84), hud=False, max_fuel=30)
+    options = dict(obs_type="grayscale", obs_size=(84, 84), max_fuel=30)
     env = gym.make("ChopperScape-v0", keep_dim=True, **options)
     plain = gym.make("ChopperScape-v0", **options)
     assert env.observation_space.shape == (84, 84, 1)
@@ -245,10 +394,12 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys):
     from chopperscape import evaluate
     from chopperscape.sb3 import ChopperScapeVecEnv
 
+    from chopperscape.sb3 import save_normalization
+
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=1, device="cpu").learn(128)
     model.save(tmp_path / "model.zip")
-    env.save(str(tmp_path / "vecnormalize.pkl"))
+    save_normalization(env, tmp_path / "vecnormalize.json")  # the statistics as data (a .pkl needs --trust-pickle)
     args = [str(tmp_path / "model.zip"), "--episodes", "2", "--option", 'obs_type="features"', "--option",
             "max_fuel=100"]
     assert evaluate.main(args) == 0

@@ -28,6 +28,19 @@ pub struct EpisodeResult {
     pub chopper: (i32, i32),
 }
 
+impl EpisodeResult {
+    /// The episode as an action log writes it.
+    pub fn played(&self) -> crate::actionlog::Played<'_> {
+        crate::actionlog::Played {
+            seed: self.seed,
+            steps: self.steps,
+            ret: self.ret,
+            cause: self.cause,
+            actions: &self.actions,
+        }
+    }
+}
+
 /// One environment that observes features only, plus its observation buffer.
 pub struct Runner {
     env: ChopperScape,

@@ -4,6 +4,8 @@
 //! Whatever writes a temporary file, folder or child process registers it here for as long as it exists
 //! ([`register`]); a handler thread started by [`install`] cleans up what is registered when a signal
 //! comes. A swap that must not be cut in half holds the registry ([`hold`]) so the handler waits for it.
+//! A child that cleans up after itself (`python -m chopperscape.datasets`) is [`Cleanup::Stop`]ped: it gets
+//! the same signal and is waited for, so that it removes its own unfinished files before this process exits.
 
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
@@ -22,6 +24,20 @@ pub enum Cleanup {
     },
     /// A child process writing an output (ffmpeg): killed.
     Kill(u32),
+    /// A child process that removes its own unfinished output on a signal: sent the same signal and waited for
+    /// (at most [`STOP_WAIT`], then killed).
+    Stop(u32),
+}
+
+/// How long a [`Cleanup::Stop`] child is given to clean up and exit.
+pub const STOP_WAIT: std::time::Duration = std::time::Duration::from_secs(60);
+
+static STOPPING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a signal came and the process is cleaning up to exit: a caller that has just seen its child end
+/// (because the handler stopped it) should leave the exit to the handler.
+pub fn is_stopping() -> bool {
+    STOPPING.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 static REGISTRY: Mutex<Vec<(u64, Cleanup)>> = Mutex::new(Vec::new());
@@ -54,13 +70,15 @@ pub fn hold() -> MutexGuard<'static, Vec<(u64, Cleanup)>> {
     registry()
 }
 
-/// Undoes everything registered; what is already gone is skipped. Returns the paths it removed.
-fn clean_up(items: &mut Vec<(u64, Cleanup)>) -> Vec<PathBuf> {
+/// Undoes everything registered after `signal`; what is already gone is skipped. Returns the paths it removed.
+fn clean_up(items: &mut Vec<(u64, Cleanup)>, signal: i32) -> Vec<PathBuf> {
     let mut removed = Vec::new();
     // Children first, so that nothing writes into what is removed next.
     for (_, item) in items.iter() {
-        if let Cleanup::Kill(pid) = item {
-            kill(*pid);
+        match item {
+            Cleanup::Kill(pid) => kill(*pid),
+            Cleanup::Stop(pid) => stop(*pid, signal),
+            _ => {}
         }
     }
     for (_, item) in items.drain(..) {
@@ -78,7 +96,7 @@ fn clean_up(items: &mut Vec<(u64, Cleanup)>) -> Vec<PathBuf> {
                     removed.push(aside);
                 }
             }
-            Cleanup::Kill(_) => {}
+            Cleanup::Kill(_) | Cleanup::Stop(_) => {}
         }
     }
     removed
@@ -95,6 +113,47 @@ fn kill(pid: u32) {
 #[cfg(not(unix))]
 fn kill(_pid: u32) {}
 
+/// Sends `signal` to child `pid` and waits until it is gone (the main thread reaps it), at most [`STOP_WAIT`];
+/// then kills it.
+#[cfg(unix)]
+fn stop(pid: u32, signal: i32) {
+    let Ok(id) = libc::pid_t::try_from(pid) else { return };
+    // SAFETY: kill takes plain integers; the pid is one of our own children.
+    unsafe { libc::kill(id, signal) };
+    let start = std::time::Instant::now();
+    // SAFETY: as above; signal 0 only asks whether the process (or its zombie) is still there.
+    while unsafe { libc::kill(id, 0) } == 0 {
+        if start.elapsed() > STOP_WAIT {
+            kill(pid);
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[cfg(not(unix))]
+fn stop(_pid: u32, _signal: i32) {}
+
+/// Makes a child process get SIGTERM when this process dies, however it dies (SIGKILL included), so that a
+/// child such as `python -m chopperscape.datasets` never goes on writing alone. Linux only; elsewhere nothing.
+pub fn die_with_parent(cmd: &mut std::process::Command) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe and touches nothing of the parent's state.
+        unsafe {
+            cmd.pre_exec(|| {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = cmd;
+}
+
 /// Starts the thread that cleans up and exits on SIGINT, SIGTERM or SIGHUP.
 ///
 /// # Errors
@@ -105,7 +164,11 @@ pub fn install() -> anyhow::Result<()> {
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
         if let Some(signal) = signals.forever().next() {
-            let removed = clean_up(&mut registry());
+            STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
+            let mut items = registry();
+            // A stopped child says itself what it removed.
+            let quiet = items.iter().any(|(_, c)| matches!(c, Cleanup::Stop(_)));
+            let removed = clean_up(&mut items, signal);
             let name = match signal {
                 SIGINT => "interrupted",
                 SIGTERM => "terminated",
@@ -117,7 +180,9 @@ pub fn install() -> anyhow::Result<()> {
                 let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
                 format!("; removed the unfinished {}", names.join(", "))
             };
-            crate::report::error_line(&format!("{name}{what}"));
+            if !quiet || !removed.is_empty() {
+                crate::report::error_line(&format!("{name}{what}"));
+            }
             std::process::exit(128 + signal);
         }
     })?;
@@ -151,9 +216,33 @@ mod tests {
             (1, Cleanup::Remove(folder.clone())),
             (2, Cleanup::Restore { aside: aside.clone(), dest: dest.clone() }),
         ];
-        let removed = clean_up(&mut items);
+        let removed = clean_up(&mut items, 2);
         assert_eq!(removed, [file, folder]);
         assert_eq!(std::fs::read_to_string(dest.join("frame_00000.png")).unwrap(), "old");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_stopped_child_gets_the_signal_and_is_waited_for() {
+        use std::os::unix::process::ExitStatusExt;
+
+        // The child traps SIGTERM, takes a moment to "clean up", and exits.
+        let child = std::process::Command::new("sh")
+            .args(["-c", "trap 'sleep 0.3; exit 7' TERM; while :; do sleep 0.05; done"])
+            .spawn()
+            .unwrap();
+        let pid = child.id();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        // As the command's main thread does, something waits for (reaps) the child.
+        let waiter = std::thread::spawn(move || {
+            let mut child = child;
+            child.wait().unwrap()
+        });
+        let started = std::time::Instant::now();
+        clean_up(&mut vec![(0, Cleanup::Stop(pid))], libc::SIGTERM);
+        let status = waiter.join().unwrap();
+        assert_eq!((status.code(), status.signal()), (Some(7), None), "it got SIGTERM and cleaned up");
+        assert!(started.elapsed() < std::time::Duration::from_secs(10));
     }
 }

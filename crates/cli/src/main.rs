@@ -4,7 +4,6 @@
 //! ([`options::GameOptions`]) mapped onto [`chopperscape::Config`] through `Config::set`, so every error names
 //! the option and its range. Usage errors (bad flags, bad values) exit with code 2, other failures with 1.
 
-mod actionlog;
 mod commands;
 mod distinct;
 mod episode;
@@ -21,6 +20,8 @@ mod server;
 mod window;
 
 use std::process::ExitCode;
+
+use chopperscape_actionlog as actionlog;
 
 use clap::{Parser, Subcommand};
 

@@ -1,9 +1,8 @@
-//! The game options of SPEC.md as command-line flags, shared by every command that plays.
+//! The game options of SPEC.md as command-line flags, shared by every command that plays: the rules options,
+//! and `--hud-style`, how drawn frames show the fuel and the lives (not a rule: action logs do not record it).
 //!
 //! Each flag is checked while parsing by `Config::set` on its SPEC name, so a bad value fails with clap's usage
 //! error (exit code 2) and the core's message naming the option and its allowed range.
-
-use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
 use chopperscape::Config;
@@ -48,10 +47,14 @@ pub struct GameOptions {
     /// Agent steps after which an episode is truncated, or `none` [default: 10000]
     #[arg(long, value_name = "N|none", allow_negative_numbers = true, value_parser = option("max_episode_steps"))]
     pub max_episode_steps: Option<String>,
+    /// How drawn frames show fuel and lives: auto (the text line at full size, gauge bars in frames under
+    /// 300x400), text, or gauge [default: auto]
+    #[arg(long, value_name = "auto|text|gauge", value_parser = option("hud_style"))]
+    pub hud_style: Option<String>,
 }
 
 impl GameOptions {
-    /// The flags that were given, as `(Config::set name, value)`.
+    /// The rules flags that were given, as `(Config::set name, value)` (`--hud-style` is not one).
     pub fn given(&self) -> Vec<(&'static str, &str)> {
         [
             ("lives", &self.lives),
@@ -69,35 +72,16 @@ impl GameOptions {
         .collect()
     }
 
-    /// `base` with these options applied.
+    /// `base` with these options applied, `--hud-style` included.
     ///
     /// # Errors
     /// A value `Config::set` refuses (already checked while parsing, so only in theory).
     pub fn apply(&self, mut base: Config) -> Result<Config> {
-        for (name, value) in self.given() {
+        for (name, value) in self.given().into_iter().chain(self.hud_style.as_deref().map(|v| ("hud_style", v))) {
             base.set(name, value).with_context(|| format!("option {name}"))?;
         }
         Ok(base)
     }
-}
-
-/// Every rules option of `config` as `Config::set` name → value text (what an action log stores).
-pub fn rule_values(config: &Config) -> BTreeMap<String, String> {
-    let steps = config.max_episode_steps.map_or_else(|| "none".to_string(), |n| n.to_string());
-    [
-        ("lives", config.lives.to_string()),
-        ("bird_fuel_collision", config.bird_fuel_collision.as_str().to_string()),
-        ("alien_prob", config.alien_prob.to_string()),
-        ("frame_skip", config.frame_skip.to_string()),
-        ("sticky_prob", config.sticky_prob.to_string()),
-        ("bird_prob", config.bird_prob.to_string()),
-        ("fuel_prob", config.fuel_prob.to_string()),
-        ("max_fuel", config.max_fuel.to_string()),
-        ("max_episode_steps", steps),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect()
 }
 
 #[cfg(test)]
@@ -105,17 +89,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rule_values_round_trip_through_config_set() {
-        let mut c = Config::features();
-        for (n, v) in [("lives", "3"), ("alien_prob", "0.125"), ("sticky_prob", "0.1"), ("max_episode_steps", "none")] {
-            c.set(n, v).unwrap();
-        }
-        let values = rule_values(&c);
-        assert_eq!(values.len(), 9);
-        let mut back = Config::features();
-        for (n, v) in &values {
-            back.set(n, v).unwrap();
-        }
-        assert_eq!(back, c);
+    fn hud_style_is_applied_but_is_not_a_rule() {
+        let options =
+            GameOptions { hud_style: Some("gauge".into()), lives: Some("2".into()), ..GameOptions::default() };
+        assert_eq!(options.given(), [("lives", "2")]);
+        let c = options.apply(Config::default()).unwrap();
+        assert_eq!((c.hud_style, c.lives), (chopperscape::HudStyle::Gauge, 2));
+        assert!(!chopperscape_actionlog::rule_values(&c).contains_key("hud_style"));
     }
 }

@@ -126,6 +126,48 @@ fn record_writes_a_gif_an_apng_frames_and_an_action_log_that_replays() {
     assert_eq!(apng_frames(&p("replay.png")), 41);
 }
 
+/// The top 60 rows of an 800 × 600 RGB PNG frame.
+fn hud_band(path: &Path) -> Vec<u8> {
+    let mut reader = png::Decoder::new(std::io::BufReader::new(File::open(path).unwrap())).read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut buf).unwrap();
+    buf.truncate(60 * 800 * 3);
+    buf
+}
+
+#[test]
+fn hud_style_gauge_draws_the_bars_in_recorded_and_replayed_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n);
+    let record = |style: &str, frames: &str| {
+        cs().args(["record", "--policy", "noop", "--seed", "3", "--max-episode-steps", "5", "--hud-style", style])
+            .arg("--frames")
+            .arg(p(frames))
+            .arg("--save-actions")
+            .arg(p(&format!("{frames}.json")))
+            .assert()
+            .success();
+    };
+    record("gauge", "gauge");
+    record("auto", "text");
+    // The gauges: the fuel bar (rows 7–29) full but for the step burnt; the lives bar (rows 37–52) full.
+    let band = hud_band(&p("gauge/frame_00001.png"));
+    let at = |x: usize, y: usize| band[(y * 800 + x) * 3];
+    assert_eq!((at(0, 7), at(798, 29), at(0, 37), at(799, 52)), (0, 0, 0, 0));
+    assert!((0..800).all(|x| at(x, 6) == 255 && at(x, 30) == 255 && at(x, 53) == 255));
+    assert_ne!(band, hud_band(&p("text/frame_00001.png")), "auto draws the text at full size");
+    // The log does not record the style (not a rule); replay draws what it is asked for.
+    let log: Value = serde_json::from_str(&std::fs::read_to_string(p("gauge.json")).unwrap()).unwrap();
+    assert!(log["options"].get("hud_style").is_none());
+    cs().arg("replay")
+        .arg(p("gauge.json"))
+        .args(["--hud-style", "gauge", "--frames"])
+        .arg(p("replayed"))
+        .assert()
+        .success();
+    assert_eq!(hud_band(&p("replayed/frame_00001.png")), band);
+}
+
 #[test]
 fn replay_reproduces_the_recorded_episode_exactly() {
     let dir = tempfile::tempdir().unwrap();
@@ -241,6 +283,8 @@ fn bad_flags_exit_2_with_a_message_naming_the_value_and_what_is_allowed() {
         (&["record", "--out", "x.avi"], &[".gif", ".mp4"]),
         (&["bench", "--seconds", "0"], &["seconds", "[0.01, 600]"]),
         (&["play", "--sticky", "2"], &["sticky_prob"]),
+        (&["record", "--hud-style", "bars"], &["hud_style", "\"auto\", \"text\", \"gauge\""]),
+        (&["replay", "x.json", "--hud-style", "bars"], &["bars", "gauge"]),
         (&["fly"], &["fly"]),
     ];
     for (args, needles) in cases {

@@ -432,3 +432,19 @@ fn a_full_disk_names_the_file_it_could_not_write() {
         assert_eq!(names(dir.path()), Vec::<String>::new(), "{err}");
     }
 }
+
+#[test]
+fn dataset_refuses_pilot_flags_with_action_logs_before_running_python() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("a.json");
+    std::fs::write(&log, "{}").unwrap();
+    for flags in [["--policy", "random"], ["--episodes", "3"], ["--seed", "4"]] {
+        cs().args(["dataset", "--out", "cs/x-v0", "--from-logs"])
+            .arg(&log)
+            .args(flags)
+            .env("CHOPPERSCAPE_PYTHON", "/nonexistent/python")
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains("cannot be used with"));
+    }
+}

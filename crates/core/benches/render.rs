@@ -7,7 +7,7 @@
 //! Each line reports the time of one step; `items/s` is steps per second. Targets: `rgb_600x800` at least
 //! 100,000 steps/s, `gray_84x84` at least 1,000,000 steps/s.
 
-use chopperscape::render::{PixelFormat, Renderer};
+use chopperscape::render::{Hud, HudScale, PixelFormat, Renderer};
 use chopperscape::{ChopperScape, Config, ObsBufMut};
 use divan::Bencher;
 use divan::counter::ItemsCount;
@@ -79,6 +79,12 @@ fn gray_84x84(bencher: Bencher) {
     bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84")], false);
 }
 
+/// `grayscale` at 84 × 84 with the text HUD of pixel layout 1 instead of the gauges (`hud_style = "text"`).
+#[divan::bench]
+fn gray_84x84_text_hud(bencher: Bencher) {
+    bench_steps(bencher, &[("obs_type", "grayscale"), ("obs_size", "84x84"), ("hud_style", "text")], false);
+}
+
 /// `grayscale` at 84 × 84 stacked 4 deep (the Atari-style setting).
 #[divan::bench]
 fn gray_84x84_stack4(bencher: Bencher) {
@@ -120,9 +126,9 @@ fn draw_full_600x800(bencher: Bencher) {
     for t in 0..60 {
         env.step(t % 5).unwrap();
     }
-    let mut renderer = Renderer::with_format(600, 800, true, PixelFormat::Rgb);
+    let mut renderer = Renderer::with_format(600, 800, Hud::Text, PixelFormat::Rgb);
     let mut frame = vec![0u8; renderer.frame_len()];
-    bencher.bench_local(|| renderer.draw_full(env.world(), 50, &mut frame));
+    bencher.bench_local(|| renderer.draw_full(env.world(), HudScale::of(env.config()), &mut frame));
 }
 
 /// Copying 1.44 MB alone: the floor under `rgb_600x800`.

@@ -10,6 +10,7 @@ pub const OPTION_NAMES: &[&str] = &[
     "obs_size",
     "frame_stack",
     "hud",
+    "hud_style",
     "lives",
     "bird_fuel_collision",
     "alien_prob",
@@ -96,6 +97,44 @@ impl std::str::FromStr for BirdFuelCollision {
     }
 }
 
+/// How the HUD is drawn into a frame (when `hud` is on): the tutorial's text line, or gauges a network can read at
+/// any size. See [`crate::render`] for the layout and [`crate::render::PIXELS_VERSION`] for its history.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum HudStyle {
+    /// The text where it is legible (frames at least half the full size in each direction,
+    /// [`crate::render::TEXT_MIN_SIZE`]), the gauges in smaller frames.
+    #[default]
+    Auto,
+    /// The text line `Fuel Left: N | Rewards: N | Lives: N` at every size (pixel layout version 1).
+    Text,
+    /// A fuel bar and a lives bar at every size.
+    Gauge,
+}
+
+impl HudStyle {
+    /// Every style, in SPEC order.
+    pub const ALL: [HudStyle; 3] = [HudStyle::Auto, HudStyle::Text, HudStyle::Gauge];
+
+    /// The name used in SPEC.md and Python: `"auto"`, `"text"`, `"gauge"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            HudStyle::Auto => "auto",
+            HudStyle::Text => "text",
+            HudStyle::Gauge => "gauge",
+        }
+    }
+}
+
+impl std::str::FromStr for HudStyle {
+    type Err = ConfigError;
+    fn from_str(s: &str) -> Result<Self, ConfigError> {
+        HudStyle::ALL
+            .into_iter()
+            .find(|t| t.as_str() == s)
+            .ok_or_else(|| out_of_range("hud_style", s, "one of \"auto\", \"text\", \"gauge\""))
+    }
+}
+
 /// The options of one environment. `Config::default()` is ChopperScape-v0 with an `rgb` 600 × 800 observation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
@@ -105,8 +144,10 @@ pub struct Config {
     pub obs_size: (u32, u32),
     /// Number of last observations stacked on the last axis. Default: 1. Range: 1..=64.
     pub frame_stack: u32,
-    /// Whether pixel observations carry the HUD line. Default: `true`.
+    /// Whether pixel observations carry the HUD. Default: `true`.
     pub hud: bool,
+    /// How the HUD is drawn: text, gauges, or text only where it is legible. Default: `Auto`.
+    pub hud_style: HudStyle,
     /// Lives per episode. Default: 1. Range: 1..=1000.
     pub lives: u32,
     /// Bird–fuel tank collisions. Default: `Pass`.
@@ -134,6 +175,7 @@ impl Default for Config {
             obs_size: (HEIGHT as u32, WIDTH as u32),
             frame_stack: 1,
             hud: true,
+            hud_style: HudStyle::Auto,
             lives: 1,
             bird_fuel_collision: BirdFuelCollision::Pass,
             alien_prob: 0.0,
@@ -220,6 +262,7 @@ impl Config {
         cmp("obs_size", format!("{:?}", self.obs_size), format!("{:?}", other.obs_size));
         cmp("frame_stack", self.frame_stack.to_string(), other.frame_stack.to_string());
         cmp("hud", self.hud.to_string(), other.hud.to_string());
+        cmp("hud_style", self.hud_style.as_str().into(), other.hud_style.as_str().into());
         cmp("lives", self.lives.to_string(), other.lives.to_string());
         cmp("bird_fuel_collision", self.bird_fuel_collision.as_str().into(), other.bird_fuel_collision.as_str().into());
         cmp("alien_prob", self.alien_prob.to_string(), other.alien_prob.to_string());
@@ -235,7 +278,8 @@ impl Config {
     /// Sets one option from its SPEC name and a textual value (as the command line and the web page give them),
     /// then validates that option. Leaves `self` unchanged on error.
     ///
-    /// Values: `obs_size` as `HxW` or `H,W`; `hud` as `true`/`false`; `max_episode_steps` as an integer or `none`.
+    /// Values: `obs_size` as `HxW` or `H,W`; `hud` as `true`/`false`; `hud_style` as `auto`/`text`/`gauge`;
+    /// `max_episode_steps` as an integer or `none`.
     ///
     /// # Errors
     /// An unknown name, or a value that does not parse or is out of range.
@@ -251,6 +295,7 @@ impl Config {
             }
             "frame_stack" => next.frame_stack = parse("frame_stack", v, "an integer in 1..=64")?,
             "hud" => next.hud = parse("hud", v, "true or false")?,
+            "hud_style" => next.hud_style = v.parse()?,
             "lives" => next.lives = parse("lives", v, "an integer in 1..=1000")?,
             "bird_fuel_collision" => next.bird_fuel_collision = v.parse()?,
             "alien_prob" => next.alien_prob = parse("alien_prob", v, "a probability in [0, 1]")?,
@@ -302,6 +347,7 @@ mod tests {
             ("obs_type", "rgba", "grayscale"),
             ("bird_fuel_collision", "explode", "destroy"),
             ("hud", "maybe", "true or false"),
+            ("hud_style", "bars", "\"auto\", \"text\", \"gauge\""),
             ("max_episode_steps", "0", "1..=4294967295"),
         ];
         for (name, value, allowed) in cases {
@@ -351,6 +397,7 @@ mod tests {
             ("obs_size", "84x84"),
             ("frame_stack", "4"),
             ("hud", "false"),
+            ("hud_style", "gauge"),
             ("lives", "3"),
             ("bird_fuel_collision", "destroy"),
             ("alien_prob", "0.02"),
@@ -367,6 +414,7 @@ mod tests {
         assert_eq!(c.obs_size, (84, 84));
         assert_eq!((c.frame_stack, c.hud, c.lives, c.frame_skip, c.max_fuel), (4, false, 3, 2, 500));
         assert_eq!(c.bird_fuel_collision, BirdFuelCollision::Destroy);
+        assert_eq!(c.hud_style, HudStyle::Gauge);
         assert_eq!(c.max_episode_steps, None);
     }
 }

@@ -59,11 +59,11 @@ pub enum SnapshotError {
     #[error("not a ChopperScape snapshot (the bytes do not start with \"CSNP\")")]
     NotASnapshot,
     /// A snapshot written by another format version.
-    #[error("snapshot format version {found} is not supported: this build reads version {supported}")]
+    #[error("snapshot format version {found} is not supported: this build reads versions 1 to {supported}")]
     Version {
         /// Version in the bytes.
         found: u16,
-        /// Version this build reads and writes.
+        /// Newest version this build reads, the one it writes.
         supported: u16,
     },
     /// The bytes end before the snapshot does.

@@ -52,7 +52,7 @@ mod spaces;
 mod world;
 
 pub use action::{ACTION_MEANINGS, Action, N_ACTIONS};
-pub use config::{BirdFuelCollision, Config, OPTION_NAMES, ObsType};
+pub use config::{BirdFuelCollision, Config, HudStyle, OPTION_NAMES, ObsType};
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;

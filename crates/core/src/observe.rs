@@ -10,14 +10,15 @@
 //! `rgb_float` is exactly `rgb as f32 / 255.0`.
 //!
 //! The canvas is drawn incrementally ([`Renderer::draw`]) and copied out; `render()` paints the full 600 × 800
-//! frame from one shared renderer, built once.
+//! frame from a shared renderer, built once. The HUD of an observation follows `hud` and `hud_style` at its
+//! `obs_size` ([`Hud::of_observation`]); `render()` always has one ([`Hud::of_render`]).
 
 use crate::config::{Config, ObsType};
 use crate::error::{ConfigError, Error};
 use crate::features::{self, FEATURES_LEN};
 use crate::limits::try_filled;
 use crate::observation::{ObsBufMut, ObsData};
-use crate::render::{PixelFormat, Renderer};
+use crate::render::{Hud, HudScale, PixelFormat, Renderer};
 use crate::spaces::{BoxSpace, Dtype};
 use crate::world::World;
 use std::sync::OnceLock;
@@ -73,7 +74,7 @@ impl Observer {
         let renderer = config
             .obs_type
             .is_pixels()
-            .then(|| Renderer::with_format(config.obs_size.0, config.obs_size.1, config.hud, format));
+            .then(|| Renderer::with_format(config.obs_size.0, config.obs_size.1, Hud::of_observation(config), format));
         let space = match config.obs_type {
             ObsType::Features => BoxSpace::repeated(
                 vec![FEATURES_LEN * k],
@@ -137,9 +138,9 @@ impl Observer {
         if let Some(renderer) = self.renderer.as_mut() {
             if reset || self.stale || matches!(self.target, Target::Caller(_)) {
                 self.stale = false;
-                renderer.draw_full(world, config.lives, &mut self.canvas);
+                renderer.draw_full(world, HudScale::of(config), &mut self.canvas);
             } else {
-                renderer.draw(world, config.lives, &mut self.canvas);
+                renderer.draw(world, HudScale::of(config), &mut self.canvas);
             }
         }
         if self.k == 1 {
@@ -194,10 +195,10 @@ impl Observer {
             };
         let renderer = self.renderer.as_mut().expect("pixel observations have a renderer");
         if holds_last_frame {
-            renderer.draw(world, config.lives, o);
+            renderer.draw(world, HudScale::of(config), o);
         } else {
             self.stale = false;
-            renderer.draw_full(world, config.lives, o);
+            renderer.draw_full(world, HudScale::of(config), o);
         }
         self.target = Target::Caller(addr);
     }
@@ -213,12 +214,16 @@ impl Observer {
         self.stale = true;
     }
 
-    /// Draws the full 600 × 800 frame of `world`, HUD included, into `rgb` (for `render()`), with a renderer
-    /// shared by every environment and built on first use.
+    /// Draws the full 600 × 800 frame of `world`, HUD included (the text, or the gauges when `hud_style` is
+    /// `gauge`), into `rgb` (for `render()`), with a renderer per HUD shared by every environment and built on
+    /// first use.
     pub(crate) fn render_full(world: &World, config: &Config, rgb: &mut [u8]) {
-        static FULL: OnceLock<Renderer> = OnceLock::new();
-        let full = FULL.get_or_init(|| Renderer::new(crate::consts::HEIGHT as u32, crate::consts::WIDTH as u32, true));
-        full.paint(world, config.lives, rgb);
+        static TEXT: OnceLock<Renderer> = OnceLock::new();
+        static GAUGE: OnceLock<Renderer> = OnceLock::new();
+        let hud = Hud::of_render(config);
+        let shared = if hud == Hud::Gauge { &GAUGE } else { &TEXT };
+        let full = shared.get_or_init(|| Renderer::new(crate::consts::HEIGHT as u32, crate::consts::WIDTH as u32, hud));
+        full.paint(world, HudScale::of(config), rgb);
     }
 
     /// Writes one unstacked observation of the current world (the canvas is already drawn).

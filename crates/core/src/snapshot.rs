@@ -4,9 +4,9 @@
 //! `frame_stack > 1`, the stacked observation, so a restored environment continues exactly as the original
 //! would: same observations, rewards, flags and infos.
 //!
-//! # Byte format (version 1, little-endian)
+//! # Byte format (version 2, little-endian)
 //! `"CSNP"`, `u16` version, `u32` payload length, payload, `u32` CRC-32 of the payload. The payload is: the
-//! options (every [`Config`] field), the generator state (`4 × u64`), the last applied action (`u8`), the world
+//! options (every [`Config`] field, in declaration order), the generator state (`4 × u64`), the last applied action (`u8`), the world
 //! (chopper, fuel, return, lives, steps, status, then each entity list as a `u32` count and its boxes), and the
 //! stacked observation (`u8` dtype tag, `u32` count, elements). Decoding checks the magic, the version, the
 //! length, the checksum and every value's range, so truncated, corrupted or foreign bytes give an error,
@@ -14,9 +14,15 @@
 //! checked (memory budget included) and the frame stack's length computed from them before anything is
 //! allocated, and every value is checked against what the rules can reach (`reachable.rs`), so a decoded
 //! snapshot is always a state the game could be in.
+//!
+//! # Versions
+//! - 2: `hud_style` (`u8`: 0 auto, 1 text, 2 gauge) follows `hud`.
+//! - 1: no `hud_style`. Still read: such a snapshot was taken when every frame carried the text HUD, so it
+//!   decodes with `hud_style = "text"`, which draws exactly those frames (its frame stack included); restoring
+//!   it into an environment of another `hud_style` is refused naming the option, like any other option.
 
 use crate::action::Action;
-use crate::config::{BirdFuelCollision, Config, ObsType};
+use crate::config::{BirdFuelCollision, Config, HudStyle, ObsType};
 use crate::consts::{ALIEN_SIZE, BIRD_SIZE, CHOPPER_SIZE, FUEL_TANK_SIZE, MISSILE_SIZE};
 use crate::env::ChopperScape;
 use crate::error::{Error, SnapshotError};
@@ -28,8 +34,10 @@ use crate::rng::Rng;
 use crate::rules::Game;
 use crate::world::{Alien, Cause, Status, World};
 
-/// The snapshot byte format's version. Bytes of another version are refused.
-pub const SNAPSHOT_VERSION: u16 = 1;
+/// The snapshot byte format's version, the one written. Versions 1 to this one are read; others are refused.
+pub const SNAPSHOT_VERSION: u16 = 2;
+/// The oldest version still read.
+const OLDEST_VERSION: u16 = 1;
 const MAGIC: &[u8; 4] = b"CSNP";
 
 /// The whole state of a [`ChopperScape`] environment.
@@ -59,6 +67,7 @@ impl Snapshot {
         p.u32(c.obs_size.1);
         p.u32(c.frame_stack);
         p.u8(c.hud as u8);
+        p.u8(c.hud_style as u8);
         p.u32(c.lives);
         p.u8(c.bird_fuel_collision as u8);
         p.f64(c.alien_prob);
@@ -125,7 +134,7 @@ impl Snapshot {
         }
         let mut r = Reader { b: &bytes[4..] };
         let version = r.u16("version")?;
-        if version != SNAPSHOT_VERSION {
+        if !(OLDEST_VERSION..=SNAPSHOT_VERSION).contains(&version) {
             return Err(SnapshotError::Version { found: version, supported: SNAPSHOT_VERSION });
         }
         let len = r.u32("payload length")? as usize;
@@ -138,7 +147,7 @@ impl Snapshot {
         if !cfg!(fuzzing) && crc32fast::hash(payload) != crc {
             return Err(SnapshotError::Corrupted("checksum mismatch".into()));
         }
-        let snap = decode_payload(&mut Reader { b: payload })?;
+        let snap = decode_payload(&mut Reader { b: payload }, version)?;
         Ok(snap)
     }
 }
@@ -177,7 +186,7 @@ impl ChopperScape {
     }
 }
 
-fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
+fn decode_payload(r: &mut Reader<'_>, version: u16) -> Result<Snapshot, SnapshotError> {
     let bad = |what: &str| SnapshotError::Corrupted(what.to_string());
     let obs_type = *ObsType::ALL.get(r.u8("obs_type")? as usize).ok_or_else(|| bad("obs_type"))?;
     let obs_size = (r.u32("obs_size")?, r.u32("obs_size")?);
@@ -186,6 +195,11 @@ fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
         0 => false,
         1 => true,
         _ => return Err(bad("hud")),
+    };
+    let hud_style = if version >= 2 {
+        *HudStyle::ALL.get(r.u8("hud_style")? as usize).ok_or_else(|| bad("hud_style"))?
+    } else {
+        HudStyle::Text
     };
     let lives = r.u32("lives")?;
     let bird_fuel_collision = match r.u8("bird_fuel_collision")? {
@@ -198,6 +212,7 @@ fn decode_payload(r: &mut Reader<'_>) -> Result<Snapshot, SnapshotError> {
         obs_size,
         frame_stack,
         hud,
+        hud_style,
         lives,
         bird_fuel_collision,
         alien_prob: r.f64("alien_prob")?,

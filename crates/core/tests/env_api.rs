@@ -152,6 +152,9 @@ fn foreign_bytes_and_other_versions_are_refused_by_name() {
     bytes[4..6].copy_from_slice(&(SNAPSHOT_VERSION + 1).to_le_bytes());
     let err = Snapshot::from_bytes(&bytes).unwrap_err();
     assert!(err.to_string().contains(&format!("version {}", SNAPSHOT_VERSION + 1)), "{err}");
+    assert!(err.to_string().contains(&format!("reads versions 1 to {SNAPSHOT_VERSION}")), "{err}");
+    bytes[4..6].copy_from_slice(&0u16.to_le_bytes());
+    assert!(matches!(Snapshot::from_bytes(&bytes), Err(SnapshotError::Version { found: 0, .. })));
 }
 
 #[test]

@@ -1,5 +1,8 @@
 //! Golden frames: seeded states drawn and compared byte for byte with the PNG files in `tests/golden/`.
 //!
+//! The 84 × 84 frames are the env's own observations (drawn incrementally through `step`); `gray_84x84_text`
+//! is pixel layout version 1 (`hud_style = "text"`), the others version 2 (`render::PIXELS_VERSION`).
+//!
 //! Regenerate them (after a deliberate change to the art, the HUD or the scaling; review the images like code):
 //!
 //! ```sh
@@ -11,8 +14,8 @@
 use std::path::PathBuf;
 
 use chopperscape::export::write_png;
-use chopperscape::render::{PixelFormat, Renderer};
-use chopperscape::{ChopperScape, Config, Env, ObsType, World};
+use chopperscape::render::{Hud, HudScale, PixelFormat, Renderer};
+use chopperscape::{ChopperScape, Config, Env, Observation, World};
 
 /// A frame to compare: its pixels, size and format.
 struct Frame {
@@ -62,8 +65,9 @@ fn check(name: &str, frame: Frame) {
     }
 }
 
-/// Steps a seeded env with a fixed action pattern until birds, tanks, an alien and a missile are all on screen.
-fn busy_env(obs: &[(&str, &str)]) -> ChopperScape {
+/// Steps a seeded env with a fixed action pattern until birds, tanks, an alien and a missile are all on screen;
+/// returns it with its last observation.
+fn busy_env(obs: &[(&str, &str)]) -> (ChopperScape, Observation) {
     let mut config = Config::default();
     for (k, v) in
         [("bird_prob", "0.2"), ("fuel_prob", "0.2"), ("alien_prob", "0.05"), ("lives", "50")].iter().chain(obs)
@@ -71,15 +75,22 @@ fn busy_env(obs: &[(&str, &str)]) -> ChopperScape {
         config.set(k, v).unwrap();
     }
     let mut env = ChopperScape::new(config).unwrap();
-    env.reset(Some(11));
+    let mut last = env.reset(Some(11)).0;
     for t in 0..400 {
         let w = env.world();
         if t > 30 && w.birds.len() >= 2 && !w.fuel_tanks.is_empty() && !w.aliens.is_empty() && !w.missiles.is_empty() {
-            return env;
+            return (env, last);
         }
-        env.step([2, 4, 0, 4, 3, 4][t % 6]).unwrap();
+        last = env.step([2, 4, 0, 4, 3, 4][t % 6]).unwrap().observation;
     }
     panic!("seed 11 never showed every kind of sprite at once");
+}
+
+/// A pixel observation (`u8`, `(H, W)` or `(H, W, 3)`) as a frame.
+fn observation_frame(obs: Observation) -> Frame {
+    let (height, width) = (obs.shape[0] as u32, obs.shape[1] as u32);
+    let format = if obs.shape.len() == 2 { PixelFormat::Gray } else { PixelFormat::Rgb };
+    Frame { pixels: obs.as_u8().expect("a u8 observation").to_vec(), height, width, format }
 }
 
 fn rgb_frame(env: &ChopperScape) -> Frame {
@@ -95,7 +106,7 @@ fn start_of_an_episode_matches_its_golden_frame() {
 
 #[test]
 fn birds_tanks_an_alien_and_a_missile_match_their_golden_frame() {
-    let env = busy_env(&[]);
+    let (env, _) = busy_env(&[("obs_type", "features")]);
     check("busy", rgb_frame(&env));
 }
 
@@ -103,27 +114,39 @@ fn birds_tanks_an_alien_and_a_missile_match_their_golden_frame() {
 fn hud_with_large_numbers_matches_its_golden_frame() {
     let mut world = World { fuel_left: 123_456, episode_return: -9_876_543, lives: 999, ..World::default() };
     world.chopper = chopperscape::Rect::placed(300, 250, chopperscape::consts::CHOPPER_SIZE);
-    let mut renderer = Renderer::new(600, 800, true);
+    let mut renderer = Renderer::new(600, 800, Hud::Text);
     let mut pixels = vec![0; renderer.frame_len()];
-    renderer.draw_full(&world, 1000, &mut pixels);
+    renderer.draw_full(&world, HudScale { max_fuel: 1000, max_lives: 1000 }, &mut pixels);
     check("hud_large_numbers", Frame { pixels, height: 600, width: 800, format: PixelFormat::Rgb });
 }
 
 #[test]
-fn grayscale_84x84_observation_matches_its_golden_frame() {
-    let env = busy_env(&[("obs_type", "grayscale"), ("obs_size", "84x84")]);
-    assert_eq!(env.config().obs_type, ObsType::Grayscale);
-    let mut renderer = Renderer::with_format(84, 84, true, PixelFormat::Gray);
-    let mut pixels = vec![0; renderer.frame_len()];
-    renderer.draw_full(env.world(), env.config().lives, &mut pixels);
-    check("gray_84x84", Frame { pixels, height: 84, width: 84, format: PixelFormat::Gray });
+fn grayscale_84x84_observation_with_the_gauges_matches_its_golden_frame() {
+    let (_, obs) = busy_env(&[("obs_type", "grayscale"), ("obs_size", "84x84")]);
+    check("gray_84x84", observation_frame(obs));
+}
+
+#[test]
+fn rgb_84x84_observation_with_the_gauges_matches_its_golden_frame() {
+    let (_, obs) = busy_env(&[("obs_size", "84x84")]);
+    check("rgb_84x84", observation_frame(obs));
+}
+
+#[test]
+fn grayscale_84x84_with_the_text_hud_matches_the_version_1_golden_frame() {
+    // `hud_style = "text"` draws pixel layout version 1: this file is the 84 × 84 golden frame of version 1.
+    let (_, obs) = busy_env(&[("obs_type", "grayscale"), ("obs_size", "84x84"), ("hud_style", "text")]);
+    check("gray_84x84_text", observation_frame(obs));
+}
+
+#[test]
+fn full_size_render_with_the_gauges_matches_its_golden_frame() {
+    let (env, _) = busy_env(&[("obs_type", "features"), ("hud_style", "gauge")]);
+    check("gauge_600x800", rgb_frame(&env));
 }
 
 #[test]
 fn odd_size_without_hud_matches_its_golden_frame() {
-    let env = busy_env(&[("obs_size", "97x131"), ("hud", "false")]);
-    let mut renderer = Renderer::new(97, 131, false);
-    let mut pixels = vec![0; renderer.frame_len()];
-    renderer.draw_full(env.world(), env.config().lives, &mut pixels);
-    check("rgb_97x131_no_hud", Frame { pixels, height: 97, width: 131, format: PixelFormat::Rgb });
+    let (_, obs) = busy_env(&[("obs_size", "97x131"), ("hud", "false")]);
+    check("rgb_97x131_no_hud", observation_frame(obs));
 }

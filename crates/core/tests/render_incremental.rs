@@ -1,8 +1,8 @@
 //! Incremental drawing equals a full redraw, bit for bit, on every frame of long random episodes under every
 //! option that changes what is drawn: aliens and missiles, lives (the HUD's third field), frame stacking,
-//! the HUD off, small and odd sizes, RGB and gray.
+//! the HUD off, each HUD style (the gauges at every layout), small and odd sizes, RGB and gray.
 
-use chopperscape::render::{PixelFormat, Renderer};
+use chopperscape::render::{Hud, HudScale, PixelFormat, Renderer};
 use chopperscape::{ChopperScape, Config, Env, ObsType};
 
 /// A tiny deterministic action source (xorshift), so the test needs no generator of its own.
@@ -32,17 +32,18 @@ fn incremental_equals_full(options: &[(&str, &str)], steps: usize) {
     let (h, w) = config.obs_size;
     let format = if config.obs_type == ObsType::Grayscale { PixelFormat::Gray } else { PixelFormat::Rgb };
     let k = config.frame_stack as usize;
+    let scale = HudScale::of(&config);
     let mut env = ChopperScape::new(config.clone()).unwrap();
-    let mut incremental = Renderer::with_format(h, w, config.hud, format);
-    let mut full = Renderer::with_format(h, w, config.hud, format);
+    let mut incremental = Renderer::with_format(h, w, Hud::of_observation(&config), format);
+    let mut full = Renderer::with_format(h, w, Hud::of_observation(&config), format);
     let mut frame = vec![0u8; incremental.frame_len()];
     let mut expected = vec![0u8; full.frame_len()];
     let mut actions = Actions(0x9E37_79B9_7F4A_7C15);
     let mut obs = env.reset(Some(5)).0;
-    incremental.draw_full(env.world(), config.lives, &mut frame);
+    incremental.draw_full(env.world(), scale, &mut frame);
     let (mut episodes, mut sprites_seen) = (1, 0);
     for t in 0..steps {
-        full.draw_full(env.world(), config.lives, &mut expected);
+        full.draw_full(env.world(), scale, &mut expected);
         assert!(frame == expected, "{options:?}: step {t}: incremental frame differs from a full redraw");
         // The newest frame of the env's stacked observation is the same picture.
         let data = obs.as_u8().expect("u8 observation");
@@ -59,10 +60,10 @@ fn incremental_equals_full(options: &[(&str, &str)], steps: usize) {
         obs = step.observation;
         if step.terminated || step.truncated {
             obs = env.reset(None).0;
-            incremental.draw_full(env.world(), config.lives, &mut frame);
+            incremental.draw_full(env.world(), scale, &mut frame);
             episodes += 1;
         } else {
-            incremental.draw(env.world(), config.lives, &mut frame);
+            incremental.draw(env.world(), scale, &mut frame);
         }
     }
     assert!(sprites_seen > steps, "{options:?}: too few sprites on screen to test anything");
@@ -105,4 +106,17 @@ fn incremental_equals_full_at_upscaled_gray_with_frame_skip_and_sticky_actions()
     let mut o = BUSY.to_vec();
     o.extend([("obs_type", "grayscale"), ("obs_size", "640x880"), ("frame_skip", "3"), ("sticky_prob", "0.25")]);
     incremental_equals_full(&o, 100);
+}
+
+#[test]
+fn incremental_equals_full_with_each_hud_style_at_every_layout() {
+    // The text at 84 × 84 (pixel layout 1); the gauges at full size, with one row above the flight band (bars
+    // side by side), with two, and stacked.
+    for (size, style, lives) in
+        [("84x84", "text", "3"), ("600x800", "gauge", "5"), ("12x40", "gauge", "2"), ("24x30", "gauge", "9")]
+    {
+        let mut o = BUSY.to_vec();
+        o.extend([("obs_size", size), ("hud_style", style), ("lives", lives)]);
+        incremental_equals_full(&o, if size == "600x800" { 150 } else { 1500 });
+    }
 }

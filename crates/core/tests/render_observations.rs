@@ -2,7 +2,7 @@
 //! declared space, the HUD and the sprites land where SPEC.md puts them, and drawing is deterministic.
 
 use chopperscape::consts::{BIRD_SIZE, CHOPPER_SIZE, FUEL_TANK_SIZE};
-use chopperscape::render::{PixelFormat, Renderer};
+use chopperscape::render::{Hud, HudScale, PixelFormat, Renderer};
 use chopperscape::{ChopperScape, Config, Dtype, Env, Rect, World, luma};
 
 fn config(options: &[(&str, &str)]) -> Config {
@@ -107,7 +107,7 @@ fn render_gives_the_full_frame_with_the_hud_whatever_the_observation() {
     let frame = env.render();
     assert_eq!(frame.len(), 600 * 800 * 3);
     let mut expected = vec![0; frame.len()];
-    Renderer::new(600, 800, true).draw_full(env.world(), 3, &mut expected);
+    Renderer::new(600, 800, Hud::Text).draw_full(env.world(), HudScale::of(env.config()), &mut expected);
     assert!(frame == expected);
     let mut into = vec![7; frame.len()];
     env.render_into(&mut into).unwrap();
@@ -124,9 +124,9 @@ fn px(frame: &[u8], x: usize, y: usize) -> [u8; 3] {
 #[test]
 fn hud_text_is_black_starts_at_x_10_and_sits_on_the_baseline_y_20() {
     let world = World { fuel_left: 1000, chopper: Rect::placed(50, 100, CHOPPER_SIZE), ..World::default() };
-    let mut r = Renderer::new(600, 800, true);
+    let mut r = Renderer::new(600, 800, Hud::Text);
     let mut frame = vec![0; r.frame_len()];
-    r.draw_full(&world, 1, &mut frame);
+    r.draw_full(&world, HudScale::default(), &mut frame);
     let ink: Vec<(usize, usize)> =
         (0..60).flat_map(|y| (0..800).map(move |x| (x, y))).filter(|&(x, y)| px(&frame, x, y) == [0, 0, 0]).collect();
     assert!(ink.len() > 500, "the HUD line has ink");
@@ -143,15 +143,15 @@ fn hud_shows_lives_only_with_more_than_one_life_and_can_be_turned_off() {
     let chopper = Rect::placed(50, 100, CHOPPER_SIZE);
     let world = World { fuel_left: 5, episode_return: 7, lives: 2, chopper, ..World::default() };
     let ink_right_of = |frame: &[u8], x0: usize| (6..22).any(|y| (x0..800).any(|x| px(frame, x, y) == [0; 3]));
-    let draw = |hud: bool, lives: u32| {
+    let draw = |hud: Hud, lives: u32| {
         let mut f = vec![0; 600 * 800 * 3];
-        Renderer::new(600, 800, hud).draw_full(&world, lives, &mut f);
+        Renderer::new(600, 800, hud).draw_full(&world, HudScale { max_fuel: 1000, max_lives: lives }, &mut f);
         f
     };
     // "Fuel Left: 5 | Rewards: 7" is 25 characters of 16 px: it ends at x = 410.
-    assert!(!ink_right_of(&draw(true, 1), 410));
-    assert!(ink_right_of(&draw(true, 2), 410));
-    assert!(draw(false, 2).iter().take(60 * 800 * 3).all(|&b| b == 255));
+    assert!(!ink_right_of(&draw(Hud::Text, 1), 410));
+    assert!(ink_right_of(&draw(Hud::Text, 2), 410));
+    assert!(draw(Hud::Off, 2).iter().take(60 * 800 * 3).all(|&b| b == 255));
 }
 
 #[test]
@@ -161,10 +161,10 @@ fn sprites_are_transparent_and_the_chopper_is_drawn_on_top() {
     let tank = Rect::placed(400, 300, FUEL_TANK_SIZE);
     let alone = World { chopper, fuel_tanks: vec![tank], ..World::default() };
     let both = World { birds: vec![bird], ..alone.clone() };
-    let mut r = Renderer::new(600, 800, false);
+    let mut r = Renderer::new(600, 800, Hud::Off);
     let (mut a, mut b) = (vec![0; r.frame_len()], vec![0; r.frame_len()]);
-    r.draw_full(&alone, 1, &mut a);
-    r.draw_full(&both, 1, &mut b);
+    r.draw_full(&alone, HudScale::default(), &mut a);
+    r.draw_full(&both, HudScale::default(), &mut b);
     // The chopper box has background pixels (transparency) and coloured ones.
     let in_box = |f: &[u8], x0: usize, y0: usize, s: usize| -> Vec<[u8; 3]> {
         (y0..y0 + s).flat_map(|y| (x0..x0 + s).map(move |x| (x, y))).map(|(x, y)| px(f, x, y)).collect()
@@ -187,9 +187,9 @@ fn sprites_are_transparent_and_the_chopper_is_drawn_on_top() {
 #[test]
 fn small_frames_scale_geometry_instead_of_losing_sprites() {
     let world = World { chopper: Rect::placed(400, 300, CHOPPER_SIZE), ..World::default() };
-    let mut r = Renderer::with_format(84, 84, false, PixelFormat::Gray);
+    let mut r = Renderer::with_format(84, 84, Hud::Off, PixelFormat::Gray);
     let mut f = vec![0; r.frame_len()];
-    r.draw_full(&world, 1, &mut f);
+    r.draw_full(&world, HudScale::default(), &mut f);
     let dark: Vec<usize> = (0..f.len()).filter(|&i| f[i] < 255).collect();
     assert!(!dark.is_empty());
     // The chopper at (400, 300) of 800 × 600 lands at (42, 42) of 84 × 84, about 7 × 9 pixels.

@@ -1,20 +1,22 @@
 //! Crafted snapshots with a correct checksum: sizes are checked before anything is allocated, and every value
 //! is checked against what the rules can reach, so a decoded snapshot is always a state the game could be in.
 
-use chopperscape::{ChopperScape, Config, Env, ObsType, Snapshot, SnapshotError};
+use chopperscape::{ChopperScape, Config, Env, Error, HudStyle, ObsType, SNAPSHOT_VERSION, Snapshot, SnapshotError};
 
-/// Payload offsets of the version-1 format (see `snapshot.rs`).
+/// Payload offsets of the version-2 format (see `snapshot.rs`).
 const OBS_TYPE: usize = 0;
 const OBS_H: usize = 1;
 const OBS_W: usize = 5;
 const FRAME_STACK: usize = 9;
-const MAX_EPISODE_STEPS: usize = 59;
-const FUEL: usize = 104;
-const RETURN: usize = 108;
-const LIVES_LEFT: usize = 116;
-const STEPS: usize = 120;
-const STATUS: usize = 124;
-const BIRDS: usize = 125;
+const HUD_STYLE: usize = 14;
+const MAX_EPISODE_STEPS: usize = 60;
+const CHOPPER: usize = 97;
+const FUEL: usize = 105;
+const RETURN: usize = 109;
+const LIVES_LEFT: usize = 117;
+const STEPS: usize = 121;
+const STATUS: usize = 125;
+const BIRDS: usize = 126;
 const HEADER: usize = 10;
 
 /// Edits the payload of `bytes` and writes the matching checksum, as a hostile user would.
@@ -125,7 +127,7 @@ fn entities_off_their_paths_or_out_of_order_are_refused() {
     let alien_age = BIRDS + 4 + 8 * w.birds.len() + 4 + 8 * w.fuel_tanks.len() + 4 + 8;
     assert!(corrupted(&tamper(&bytes, |p| put(p, alien_age, &7u32.to_le_bytes()))).contains("alien"));
     // Far outside the band, where `x + w` would overflow an i32 (found by the fuzzer).
-    let far = tamper(&bytes, |p| put(p, 96, &(i32::MAX - 10).to_le_bytes()));
+    let far = tamper(&bytes, |p| put(p, CHOPPER, &(i32::MAX - 10).to_le_bytes()));
     assert!(corrupted(&far).contains("outside the flight band"), "{}", corrupted(&far));
     let huge_count = tamper(&bytes, |p| put(p, BIRDS, &10_000u32.to_le_bytes()));
     assert!(corrupted(&huge_count).contains("at most"));
@@ -233,4 +235,51 @@ fn a_step_counter_at_u32_max_saturates_instead_of_wrapping_or_truncating() {
     }
     assert_eq!(env.world().steps, u32::MAX);
     assert_eq!(env.world().episode_return, i64::from(u32::MAX - 1) + 3);
+}
+
+#[test]
+fn an_unknown_hud_style_is_refused_by_name() {
+    let bytes = played(Config::features(), 10).snapshot().to_bytes();
+    assert_eq!(bytes[HEADER + HUD_STYLE], HudStyle::Auto as u8);
+    let err = corrupted(&tamper(&bytes, |p| p[HUD_STYLE] = 3));
+    assert!(err.contains("hud_style"), "{err}");
+}
+
+/// `bytes` (version 2) rewritten in the version-1 format: no `hud_style` byte.
+fn as_version_1(bytes: &[u8]) -> Vec<u8> {
+    let mut v1 = tamper(bytes, |p| {
+        p.remove(HUD_STYLE);
+    });
+    v1[4..6].copy_from_slice(&1u16.to_le_bytes());
+    v1
+}
+
+#[test]
+fn version_1_snapshots_load_with_the_text_hud_they_were_drawn_with() {
+    assert_eq!(SNAPSHOT_VERSION, 2);
+    let options = [("obs_type", "grayscale"), ("obs_size", "84x84"), ("frame_stack", "3"), ("hud_style", "text")];
+    let mut config = Config::default();
+    for (k, v) in options {
+        config.set(k, v).unwrap();
+    }
+    let mut original = played(config.clone(), 40);
+    let v1 = as_version_1(&original.snapshot().to_bytes());
+    let snap = Snapshot::from_bytes(&v1).unwrap();
+    assert_eq!(snap.config().hud_style, HudStyle::Text);
+    assert_eq!(snap.config(), &config);
+    // It continues exactly as the env it was taken from (stacked frames included).
+    let mut restored = ChopperScape::from_snapshot(&snap).unwrap();
+    for t in 0..30 {
+        let (a, b) = (original.step(t % 5).unwrap(), restored.step(t % 5).unwrap());
+        assert_eq!(a, b, "step {t}");
+        if a.terminated {
+            break;
+        }
+    }
+    // An env of the default style refuses it by name.
+    let mut auto = ChopperScape::new(Config { hud_style: HudStyle::Auto, ..config }).unwrap();
+    match auto.restore(&snap) {
+        Err(Error::Snapshot(SnapshotError::ConfigMismatch(m))) => assert!(m.contains("hud_style text != auto"), "{m}"),
+        other => panic!("expected a refusal naming hud_style, got {other:?}"),
+    }
 }

@@ -92,7 +92,8 @@ impl PyEnv {
         )
     }
 
-    /// The full 600 × 800 × 3 `uint8` frame of the current state, HUD included, whatever the observation.
+    /// The full 600 × 800 × 3 `uint8` frame of the current state, HUD included whatever the observation (the text
+    /// line, or the fuel and lives bars with `hud_style="gauge"`).
     fn render<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
         let py = slf.py();
         let this = slf.try_borrow().map_err(in_use)?;

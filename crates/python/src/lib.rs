@@ -9,6 +9,8 @@
 //!
 //! The Gymnasium classes live in Python (`python/chopperscape/`), over this module.
 
+mod actionlog;
+mod arrays;
 mod env;
 mod errors;
 mod obs;
@@ -24,7 +26,11 @@ mod _core {
     use super::*;
 
     #[pymodule_export]
+    use super::actionlog::read_action_log;
+    #[pymodule_export]
     use super::env::PyEnv;
+    #[pymodule_export]
+    use super::options::option_value;
     #[pymodule_export]
     use super::pilots::{PyPilot, PyVectorPilot};
     #[pymodule_export]
@@ -36,11 +42,14 @@ mod _core {
         m.add("OPTION_NAMES", chopperscape::OPTION_NAMES.to_vec())?;
         m.add("CAUSE_NAMES", chopperscape_vector::CAUSE_NAMES.to_vec())?;
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
+        m.add("FEATURES_VERSION", chopperscape::features::FEATURES_VERSION)?;
+        m.add("PIXELS_VERSION", chopperscape::render::PIXELS_VERSION)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
         m.add("PILOT_NAMES", chopperscape::policy::NAMES.to_vec())?;
         m.add("MAX_ENV_BYTES", chopperscape::limits::MAX_ENV_BYTES)?;
         m.add("MAX_BATCH_BYTES", chopperscape_vector::MAX_BATCH_BYTES)?;
         m.add("MAX_THREADS", chopperscape_vector::MAX_THREADS)?;
+        m.add("MAX_LOG_BYTES", chopperscape_actionlog::MAX_LOG_BYTES)?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         Ok(())
     }

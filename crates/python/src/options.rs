@@ -2,6 +2,7 @@
 //! live in the core.
 
 use chopperscape::Config;
+use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyString};
@@ -69,4 +70,34 @@ fn option_text(name: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
         return Ok(if value.is_truthy()? { "true" } else { "false" }.into());
     }
     Ok(value.str()?.to_string())
+}
+
+/// The value of option `name` written as text (as the command line's flags take it: `84x84`, `false`, `none`,
+/// `0.02`, `features`), parsed by [`Config::set`] and returned as the Python value of the option's type: `int`,
+/// `float`, `str`, `bool`, a `(height, width)` tuple, or `None` for `max_episode_steps=none`. The one place where
+/// text from a command line becomes a typed option, so every tool reads `--option NAME=VALUE` alike.
+///
+/// # Errors
+/// `ValueError` naming an unknown option, or the option and what it allows.
+#[pyfunction]
+pub(crate) fn option_value<'py>(py: Python<'py>, name: &str, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    // Features: no observation budget interferes with checking one option on its own.
+    let mut c = Config::features();
+    c.set(name, text).map_err(config_error)?;
+    match name {
+        "obs_type" => c.obs_type.as_str().into_bound_py_any(py),
+        "obs_size" => c.obs_size.into_bound_py_any(py),
+        "frame_stack" => c.frame_stack.into_bound_py_any(py),
+        "hud" => c.hud.into_bound_py_any(py),
+        "lives" => c.lives.into_bound_py_any(py),
+        "bird_fuel_collision" => c.bird_fuel_collision.as_str().into_bound_py_any(py),
+        "alien_prob" => c.alien_prob.into_bound_py_any(py),
+        "frame_skip" => c.frame_skip.into_bound_py_any(py),
+        "sticky_prob" => c.sticky_prob.into_bound_py_any(py),
+        "bird_prob" => c.bird_prob.into_bound_py_any(py),
+        "fuel_prob" => c.fuel_prob.into_bound_py_any(py),
+        "max_fuel" => c.max_fuel.into_bound_py_any(py),
+        "max_episode_steps" => c.max_episode_steps.into_bound_py_any(py),
+        _ => Err(PyValueError::new_err(format!("option `{name}` has no Python value type here"))),
+    }
 }

@@ -5,14 +5,26 @@
 //! `sticky_prob`), so it is built for an env's options the first time it sees that env, and rebuilt when it
 //! sees an env with other options. `random` draws from its own generator, seeded as the CLI's `demo` seeds it.
 
+use chopperscape::limits::{check_budget, probe};
 use chopperscape::policy::{self, Policy};
 use chopperscape::{Action, Config};
+use chopperscape_vector::MAX_BATCH_BYTES;
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::env::PyEnv;
+use crate::errors::{config_error, in_use};
 use crate::vector::PyVectorEnv;
+
+/// Heap bytes one pilot may take beside its [`Built`]: its boxed policy (the largest, `random`'s generator,
+/// is 40 bytes), its name, and the options it plans for (kept inline). Generous, so the budget is an upper bound.
+const PILOT_HEAP_BYTES: u64 = 128;
+
+/// The memory `num_envs` pilots take: what a `VectorPilot` is checked against before anything is allocated.
+fn pilots_bytes(num_envs: usize) -> u64 {
+    (std::mem::size_of::<Built>() as u64 + PILOT_HEAP_BYTES).saturating_mul(num_envs as u64)
+}
 
 /// One pilot by name, and the options it was built for.
 struct Built {
@@ -59,11 +71,13 @@ impl PyPilot {
         Ok(PyPilot { inner: Built::new(name, seed)? })
     }
 
-    /// The action (0..=4) for the env's current state.
-    fn act(&mut self, env: PyRef<'_, PyEnv>) -> u8 {
+    /// The action (0..=4) for the env's current state. While another thread is inside a call on the env, the
+    /// package's two-threads `RuntimeError`.
+    fn act(&mut self, env: &Bound<'_, PyEnv>) -> PyResult<u8> {
+        let env = env.try_borrow().map_err(in_use)?;
         let env = env.core();
         self.inner.fit(env.config());
-        self.inner.policy.act(env.world()) as u8
+        Ok(self.inner.policy.act(env.world()) as u8)
     }
 
     /// Starts over as if new with `seed` (`None`: the seed it has): `random` restarts its generator.
@@ -101,13 +115,27 @@ impl PyVectorPilot {
         if num_envs == 0 {
             return Err(PyValueError::new_err("invalid value 0 for option `num_envs`: allowed an integer >= 1"));
         }
-        let pilots = (0..num_envs as u64).map(|i| Built::new(name, seed.wrapping_add(i))).collect::<PyResult<_>>()?;
+        let first = Built::new(name, seed)?;
+        // The batch's memory budget, checked (and asked of the system) before anything is allocated.
+        let what = format!("{num_envs} pilots");
+        let needed = pilots_bytes(num_envs);
+        check_budget(what.clone(), needed, MAX_BATCH_BYTES, "fly fewer environments").map_err(config_error)?;
+        probe(needed, &what).map_err(config_error)?;
+        let mut pilots = Vec::new();
+        pilots
+            .try_reserve_exact(num_envs)
+            .map_err(|_| config_error(chopperscape::ConfigError::OutOfMemory { what: what.clone(), needed }))?;
+        pilots.push(first);
+        for i in 1..num_envs as u64 {
+            pilots.push(Built::new(name, seed.wrapping_add(i))?);
+        }
         Ok(PyVectorPilot { pilots, seed })
     }
 
     /// The `num_envs` actions (`int64`) for the batch's current states. An environment whose next step is an
     /// autoreset (its action is ignored) gets 4 (Do Nothing), and its pilot draws nothing for it.
-    fn act<'py>(&mut self, py: Python<'py>, envs: PyRef<'py, PyVectorEnv>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    fn act<'py>(&mut self, py: Python<'py>, envs: &Bound<'py, PyVectorEnv>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let envs = envs.try_borrow().map_err(in_use)?;
         let inner = envs.core();
         if inner.num_envs() != self.pilots.len() {
             return Err(PyValueError::new_err(format!(

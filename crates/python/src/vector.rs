@@ -1,77 +1,32 @@
 //! `chopperscape._core.VectorEnv`: a batch of environments stepped by one call with the GIL released,
 //! written into numpy arrays. The Gymnasium class in `chopperscape/vector.py` wraps it.
 
+use chopperscape::Snapshot;
 use chopperscape::consts::{HEIGHT, WIDTH};
-use chopperscape::{Dtype, ObsBufMut, Snapshot};
 use chopperscape_vector::{AutoresetMode, BatchMut, VectorEnv};
-use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadwriteArray1, PyReadwriteArrayDyn};
+use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::{PyIndexError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 
+use crate::arrays::{ObsOut, Out};
 use crate::errors::{batch_error, env_error, in_use};
-use crate::obs::{BoundsArrays, ObsArray, bounds};
+use crate::obs::{BoundsArrays, bounds};
 use crate::options::config_from;
 
 /// The output arrays of a batch.
 struct Arrays {
-    obs: ObsPy,
-    final_obs: Option<ObsPy>,
+    obs: ObsOut,
+    final_obs: Option<ObsOut>,
     /// `float64`, as Gymnasium's vector envs return rewards; the batch writes `float32` into `rewards32`.
-    rewards: Py<PyArray1<f64>>,
-    terminated: Py<PyArray1<bool>>,
-    truncated: Py<PyArray1<bool>>,
+    rewards: Out<f64>,
+    terminated: Out<bool>,
+    truncated: Out<bool>,
     /// `int64`, as Gymnasium batches Python ints; the batch writes `uint32` into `fuel32`.
-    fuel: Py<PyArray1<i64>>,
+    fuel: Out<i64>,
     /// `int64`; the batch writes `uint32` into `lives32`.
-    lives: Py<PyArray1<i64>>,
-    cause: Py<PyArray1<u8>>,
-    /// With `copy=False`: read-only views of the arrays above, in the order `run` returns them, handed out
-    /// instead of the arrays themselves (the batch keeps writing into them).
-    views: Option<Vec<Py<PyAny>>>,
-}
-
-enum ObsPy {
-    U8(Py<PyArrayDyn<u8>>),
-    F32(Py<PyArrayDyn<f32>>),
-}
-
-/// Write borrows of an observation array.
-enum ObsRw<'py> {
-    U8(PyReadwriteArrayDyn<'py, u8>),
-    F32(PyReadwriteArrayDyn<'py, f32>),
-}
-
-impl ObsPy {
-    fn new(py: Python<'_>, shape: &[usize], dtype: Dtype) -> PyResult<ObsPy> {
-        Ok(match ObsArray::zeros(py, shape, dtype)? {
-            ObsArray::U8(a) => ObsPy::U8(a.unbind()),
-            ObsArray::F32(a) => ObsPy::F32(a.unbind()),
-        })
-    }
-
-    fn bind<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        match self {
-            ObsPy::U8(a) => a.bind(py).clone().into_any(),
-            ObsPy::F32(a) => a.bind(py).clone().into_any(),
-        }
-    }
-
-    fn borrow<'py>(&self, py: Python<'py>) -> PyResult<ObsRw<'py>> {
-        Ok(match self {
-            ObsPy::U8(a) => ObsRw::U8(a.bind(py).try_readwrite().map_err(borrowed)?),
-            ObsPy::F32(a) => ObsRw::F32(a.bind(py).try_readwrite().map_err(borrowed)?),
-        })
-    }
-}
-
-impl ObsRw<'_> {
-    fn as_buf_mut(&mut self) -> ObsBufMut<'_> {
-        match self {
-            ObsRw::U8(a) => ObsBufMut::U8(a.as_slice_mut().expect("the binding's own arrays are contiguous")),
-            ObsRw::F32(a) => ObsBufMut::F32(a.as_slice_mut().expect("the binding's own arrays are contiguous")),
-        }
-    }
+    lives: Out<i64>,
+    cause: Out<u8>,
 }
 
 /// Copies `from` into the wider numpy type Gymnasium's vector envs use.
@@ -81,17 +36,10 @@ fn widen<S: Copy, D: From<S>>(to: &mut [D], from: &[S]) {
     }
 }
 
-fn borrowed(e: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(format!("the vector env's output arrays are in use elsewhere: {e}"))
-}
-
-fn rw<'py, T: numpy::Element>(a: &Py<PyArray1<T>>, py: Python<'py>) -> PyResult<PyReadwriteArray1<'py, T>> {
-    a.bind(py).try_readwrite().map_err(borrowed)
-}
-
 /// `num_envs` environments stepped together over `num_threads` threads; environment `i` of a batch reset with
-/// seed `s` is seeded `s + i`. With `copy`, each call returns fresh arrays; without, the same arrays every call.
-/// `time_limit` truncates episodes as Gymnasium's `TimeLimit` does (see `VectorEnv::set_time_limit`).
+/// seed `s` is seeded `s + i`. With `copy`, each call returns fresh arrays; without, the same sealed arrays every
+/// call (read-only for good: see `arrays.rs`). `time_limit` truncates episodes as Gymnasium's `TimeLimit` does
+/// (see `VectorEnv::set_time_limit`).
 #[pyclass(name = "VectorEnv", module = "chopperscape._core")]
 pub(crate) struct PyVectorEnv {
     inner: VectorEnv,
@@ -109,34 +57,21 @@ impl PyVectorEnv {
         let mut shape = vec![n];
         shape.extend_from_slice(&space.shape);
         let same_step = self.inner.autoreset_mode() == AutoresetMode::SameStep;
-        let mut arrays = Arrays {
-            obs: ObsPy::new(py, &shape, space.dtype)?,
-            final_obs: same_step.then(|| ObsPy::new(py, &shape, space.dtype)).transpose()?,
-            rewards: PyArray1::zeros(py, n, false).unbind(),
-            terminated: PyArray1::zeros(py, n, false).unbind(),
-            truncated: PyArray1::zeros(py, n, false).unbind(),
-            fuel: PyArray1::zeros(py, n, false).unbind(),
-            lives: PyArray1::zeros(py, n, false).unbind(),
-            cause: PyArray1::zeros(py, n, false).unbind(),
-            views: None,
-        };
-        if !self.copy {
-            let read_only = |a: Bound<'_, PyAny>| -> PyResult<Py<PyAny>> {
-                if a.is_none() {
-                    return Ok(a.unbind());
-                }
-                let view = a.call_method0("view")?;
-                view.getattr("flags")?.setattr("writeable", false)?;
-                Ok(view.unbind())
-            };
-            arrays.views = Some(arrays.all(py).into_iter().map(read_only).collect::<PyResult<_>>()?);
-        }
-        Ok(arrays)
+        let sealed = !self.copy;
+        Ok(Arrays {
+            obs: ObsOut::new(py, &shape, space.dtype, sealed)?,
+            final_obs: same_step.then(|| ObsOut::new(py, &shape, space.dtype, sealed)).transpose()?,
+            rewards: Out::new(py, &[n], sealed)?,
+            terminated: Out::new(py, &[n], sealed)?,
+            truncated: Out::new(py, &[n], sealed)?,
+            fuel: Out::new(py, &[n], sealed)?,
+            lives: Out::new(py, &[n], sealed)?,
+            cause: Out::new(py, &[n], sealed)?,
+        })
     }
 
     /// Runs `f` on the output arrays (fresh ones with `copy`) with the GIL released; returns the arrays as
-    /// `(obs, rewards, terminated, truncated, fuel, lives, cause, final_obs | None)`, read-only views of them
-    /// without `copy`.
+    /// `(obs, rewards, terminated, truncated, fuel, lives, cause, final_obs | None)`.
     fn run<'py>(
         slf: &Bound<'py, Self>,
         f: impl FnOnce(&mut VectorEnv, BatchMut<'_>) -> PyResult<()> + Send,
@@ -148,33 +83,29 @@ impl PyVectorEnv {
             this.arrays = Some(this.new_arrays(py)?);
         }
         let a = this.arrays.as_ref().expect("arrays were just made");
-        let mut obs = a.obs.borrow(py)?;
-        let mut final_obs = a.final_obs.as_ref().map(|f| f.borrow(py)).transpose()?;
-        let (mut rewards, mut terminated, mut truncated) =
-            (rw(&a.rewards, py)?, rw(&a.terminated, py)?, rw(&a.truncated, py)?);
-        let (mut fuel, mut lives, mut cause) = (rw(&a.fuel, py)?, rw(&a.lives, py)?, rw(&a.cause, py)?);
+        // SAFETY: the arrays are this binding's own, written only here under the exclusive borrow of `this`, and
+        // no input of `f` is one of them (`step` copies the actions first); see `Out::slice_mut`.
+        let (rewards, fuel, lives) = unsafe { (a.rewards.slice_mut(py), a.fuel.slice_mut(py), a.lives.slice_mut(py)) };
         let (rewards32, fuel32, lives32) = (&mut this.rewards32, &mut this.fuel32, &mut this.lives32);
-        let contiguous = "the binding's own arrays are contiguous";
-        let batch = BatchMut {
-            observations: obs.as_buf_mut(),
-            rewards: rewards32,
-            terminated: terminated.as_slice_mut().expect(contiguous),
-            truncated: truncated.as_slice_mut().expect(contiguous),
-            fuel: fuel32,
-            lives: lives32,
-            cause: cause.as_slice_mut().expect(contiguous),
-            final_observations: final_obs.as_mut().map(ObsRw::as_buf_mut),
+        // SAFETY: as above.
+        let batch = unsafe {
+            BatchMut {
+                observations: a.obs.buf_mut(py),
+                rewards: rewards32,
+                terminated: a.terminated.slice_mut(py),
+                truncated: a.truncated.slice_mut(py),
+                fuel: fuel32,
+                lives: lives32,
+                cause: a.cause.slice_mut(py),
+                final_observations: a.final_obs.as_ref().map(|f| f.buf_mut(py)),
+            }
         };
         let inner = &mut this.inner;
         py.detach(|| f(inner, batch))?;
-        widen(rewards.as_slice_mut().expect(contiguous), &this.rewards32);
-        widen(fuel.as_slice_mut().expect(contiguous), &this.fuel32);
-        widen(lives.as_slice_mut().expect(contiguous), &this.lives32);
-        drop((obs, final_obs, rewards, terminated, truncated, fuel, lives, cause));
-        match &a.views {
-            Some(views) => PyTuple::new(py, views.iter().map(|v| v.bind(py))),
-            None => PyTuple::new(py, a.all(py)),
-        }
+        widen(rewards, &this.rewards32);
+        widen(fuel, &this.fuel32);
+        widen(lives, &this.lives32);
+        PyTuple::new(py, a.all(py))
     }
 }
 
@@ -183,12 +114,12 @@ impl Arrays {
     fn all<'py>(&self, py: Python<'py>) -> [Bound<'py, PyAny>; 8] {
         [
             self.obs.bind(py),
-            self.rewards.bind(py).clone().into_any(),
-            self.terminated.bind(py).clone().into_any(),
-            self.truncated.bind(py).clone().into_any(),
-            self.fuel.bind(py).clone().into_any(),
-            self.lives.bind(py).clone().into_any(),
-            self.cause.bind(py).clone().into_any(),
+            self.rewards.bind(py),
+            self.terminated.bind(py),
+            self.truncated.bind(py),
+            self.fuel.bind(py),
+            self.lives.bind(py),
+            self.cause.bind(py),
             self.final_obs.as_ref().map_or_else(|| py.None().into_bound(py), |f| f.bind(py)),
         ]
     }
@@ -256,10 +187,11 @@ impl PyVectorEnv {
         PyVectorEnv::run(slf, move |v, out| v.reset_seeds_into(&seeds, out).map_err(batch_error))
     }
 
-    /// Steps every environment; `actions` is a contiguous `int64` array of `num_envs` actions.
+    /// Steps every environment; `actions` is a contiguous `int64` array of `num_envs` actions. They are copied
+    /// first (a few bytes an env), so that no output array the batch writes can be the input it reads.
     fn step<'py>(slf: &Bound<'py, Self>, actions: PyReadonlyArray1<'py, i64>) -> PyResult<Bound<'py, PyTuple>> {
-        let actions = actions.as_slice().map_err(|e| PyValueError::new_err(format!("actions: {e}")))?;
-        PyVectorEnv::run(slf, |v, out| v.step_into(actions, out).map_err(batch_error))
+        let actions = actions.as_slice().map_err(|e| PyValueError::new_err(format!("actions: {e}")))?.to_vec();
+        PyVectorEnv::run(slf, move |v, out| v.step_into(&actions, out).map_err(batch_error))
     }
 
     /// The full 600 × 800 × 3 frame of environment `i`.

@@ -4,14 +4,20 @@
 //! runs the Python package: `python -m chopperscape.datasets` with the same arguments. It needs the `chopperscape`
 //! Python package and `minari[hdf5]` in the interpreter named by `CHOPPERSCAPE_PYTHON` (default `python3`), and
 //! says so when they are missing.
+//!
+//! The child stops with this process: SIGINT, SIGTERM or SIGHUP is passed on to it and waited for (it removes its
+//! unfinished dataset itself), and if this process is killed outright the child gets SIGTERM (Linux). Its exit
+//! status is this command's. Defaults (`features` observations, the heuristic pilot, one episode, seed 0) are
+//! the Python module's own, so there is one of each.
 
 use std::path::PathBuf;
-use std::process::{Command, ExitCode, Stdio};
+use std::process::{Command, ExitCode, ExitStatus, Stdio};
 
 use anyhow::{Context, Result};
 use clap::Args;
 
 use super::policy_parser;
+use crate::interrupt::{self, Cleanup};
 use crate::options::GameOptions;
 use crate::usage_bail;
 
@@ -33,25 +39,25 @@ pub struct DatasetArgs {
     /// The dataset id, `namespace/name-vN` (or `name-vN`)
     #[arg(long, value_name = "NAME")]
     pub out: String,
-    /// The pilot: random, heuristic, or a fixed action (right, left, down, up, noop)
-    #[arg(long, default_value = "heuristic", value_parser = policy_parser())]
-    pub policy: String,
-    /// Number of episodes, at least 1
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    pub episodes: u32,
-    /// Seed of the first episode
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Observation: rgb, rgb_float, grayscale or features
-    #[arg(long, default_value = "features", value_parser = ["rgb", "rgb_float", "grayscale", "features"])]
-    pub obs_type: String,
+    /// The pilot: random, heuristic, or a fixed action (right, left, down, up, noop) [default: heuristic]
+    #[arg(long, value_parser = policy_parser(), conflicts_with = "from_logs")]
+    pub policy: Option<String>,
+    /// Number of episodes, at least 1 [default: 1]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "from_logs")]
+    pub episodes: Option<u32>,
+    /// Seed of the first episode [default: 0]
+    #[arg(long, value_parser = super::seed_parser, conflicts_with = "from_logs")]
+    pub seed: Option<u64>,
+    /// Observation: rgb, rgb_float, grayscale or features [default: features]
+    #[arg(long, value_parser = ["rgb", "rgb_float", "grayscale", "features"])]
+    pub obs_type: Option<String>,
     /// Pixel observation size HxW, e.g. 84x84 [default: 600x800]
     #[arg(long, value_name = "HxW")]
     pub obs_size: Option<String>,
     /// Stack the last K observations
     #[arg(long, value_name = "K")]
     pub frame_stack: Option<u32>,
-    /// Leave the HUD line out of pixel observations
+    /// Leave the HUD out of pixel observations
     #[arg(long)]
     pub no_hud: bool,
     /// Replay these action logs (`play --save-actions`) instead of a pilot; the rules come from the logs
@@ -73,7 +79,9 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode> {
     let mut option = |name: &str, value: &str| {
         cmd.args(["--option", &format!("{name}={value}")]);
     };
-    option("obs_type", &args.obs_type);
+    if let Some(obs_type) = &args.obs_type {
+        option("obs_type", obs_type);
+    }
     if let Some(size) = &args.obs_size {
         option("obs_size", size);
     }
@@ -83,27 +91,48 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode> {
     if args.no_hud {
         option("hud", "false");
     }
+    if let Some(style) = &args.options.hud_style {
+        option("hud_style", style);
+    }
     for (name, value) in args.options.given() {
         option(name, value);
     }
-    if args.from_logs.is_empty() {
-        cmd.args([
-            "--policy",
-            &args.policy,
-            "--episodes",
-            &args.episodes.to_string(),
-            "--seed",
-            &args.seed.to_string(),
-        ]);
-    } else {
+    if let Some(policy) = &args.policy {
+        cmd.args(["--policy", policy]);
+    }
+    if let Some(episodes) = args.episodes {
+        cmd.args(["--episodes", &episodes.to_string()]);
+    }
+    if let Some(seed) = args.seed {
+        cmd.args(["--seed", &seed.to_string()]);
+    }
+    if !args.from_logs.is_empty() {
         cmd.arg("--from-logs").args(&args.from_logs);
     }
-    let status = cmd.status().with_context(|| format!("cannot run {python}"))?;
-    Ok(match status.code() {
-        Some(0) => ExitCode::SUCCESS,
-        Some(2) => ExitCode::from(2),
-        _ => ExitCode::FAILURE,
-    })
+    interrupt::die_with_parent(&mut cmd);
+    let mut child = cmd.spawn().with_context(|| format!("cannot run {python}"))?;
+    let registered = interrupt::register(Cleanup::Stop(child.id()));
+    let status = child.wait().with_context(|| format!("cannot wait for {python}"))?;
+    if interrupt::is_stopping() {
+        // The signal handler stopped the child and exits with the signal's status.
+        loop {
+            std::thread::park();
+        }
+    }
+    drop(registered);
+    Ok(ExitCode::from(exit_status(status)))
+}
+
+/// The child's exit status as this command's: its code, or 128 + the signal that ended it.
+fn exit_status(status: ExitStatus) -> u8 {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(signal) = status.signal() {
+            return u8::try_from(128 + signal).unwrap_or(1);
+        }
+    }
+    status.code().and_then(|c| u8::try_from(c).ok()).unwrap_or(1)
 }
 
 /// Fails with what to install when `python` cannot import the package and Minari.

@@ -94,7 +94,7 @@ mod game {
         let result = runner.result();
         // The played episode is saved first, so a closed standard output cannot lose it.
         if let Some(path) = &args.save_actions {
-            output::write_atomic(path, actionlog::to_json(config, "human", &result).as_bytes(), args.force)?;
+            output::write_atomic(path, actionlog::to_json(config, "human", &result.played()).as_bytes(), args.force)?;
             crate::note!("wrote {} ({} actions)", path.display(), result.steps);
         }
         crate::say!("{}", serde_json::to_string(&result)?)?;

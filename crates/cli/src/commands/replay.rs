@@ -24,6 +24,9 @@ pub struct ReplayArgs {
     /// Print the replayed episode as one JSON line
     #[arg(long)]
     pub json: bool,
+    /// How the drawn frames show fuel and lives: auto (the text line at full size), text, or gauge [default: auto]
+    #[arg(long, value_name = "auto|text|gauge", value_parser = ["auto", "text", "gauge"])]
+    pub hud_style: Option<String>,
     #[command(flatten)]
     pub outputs: RecordOutputs,
 }
@@ -34,7 +37,10 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
         usage_bail!("replay reads an action log; --save-actions does not apply (copy the file instead)");
     }
     args.outputs.check(Some(("the action log", &args.file)))?;
-    let log = actionlog::read(&args.file)?;
+    let mut log = actionlog::read(&args.file)?;
+    if let Some(style) = &args.hud_style {
+        log.config.set("hud_style", style)?;
+    }
     let bar = progress::bar(u64::from(log.steps) + 1, "replaying", args.json);
     let mut recorder = recorder(&args.outputs, log.steps + 1)?;
     let got = replay_actions(&log.config, log.seed, &log.actions, |env| {

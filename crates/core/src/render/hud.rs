@@ -1,13 +1,15 @@
-//! The HUD line: `Fuel Left: N | Rewards: N` (plus ` | Lives: N` with more than one life), in black.
+//! The text HUD: `Fuel Left: N | Rewards: N` (plus ` | Lives: N` with more than one life), in black.
 //!
 //! The font is `font8x8`'s public-domain 8 × 8 bitmap font, drawn at twice its size in the 800 × 600 frame (`|` as a solid bar):
 //! each glyph is a 16 × 16 cell, the text's left end at x = 10 and the bottom of its capitals on the baseline
 //! y = 20 (glyph rows 0–6 above it, the descender row below), so cells span y = 6..22.
 //!
 //! At other frame sizes the text is scaled like everything else: each frame pixel samples the 800 × 600 text
-//! at its centre (nearest neighbour), through column and row tables built once. At small sizes (84 × 84) the
-//! line becomes a band one or two pixels high that is no longer legible but still changes with the numbers.
-//! Text beyond the right edge is cut off.
+//! at its centre (nearest neighbour), through column and row tables built once. From half the full size
+//! down (`TEXT_MIN_SIZE`) every font bit still gets a pixel; below it bits are skipped, and at small sizes
+//! (84 × 84) the line becomes a band one or two pixels high that is no longer legible but still changes with
+//! the numbers (what `hud_style = "text"` draws; `"auto"` draws the gauges there). Text beyond the right edge is
+//! cut off.
 
 use std::fmt::Write;
 

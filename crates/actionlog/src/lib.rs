@@ -1,4 +1,6 @@
-//! The action log: one played episode as a JSON document that `chopperscape replay` re-runs.
+//! The action log: one played episode as a JSON document that `chopperscape replay` re-runs, and that
+//! `chopperscape.datasets.from_action_logs` (Python) replays into a dataset. This crate is the one reader of
+//! it, shared by the command line and the Python binding, so both accept and refuse exactly the same files.
 //!
 //! ```json
 //! {"format": "chopperscape-actions", "version": 1, "env": "ChopperScape-v0", "seed": 3,
@@ -10,18 +12,14 @@
 //! its end.
 
 use std::collections::BTreeMap;
-use std::path::Path;
-
 use std::io::Read;
+use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use chopperscape::Config;
 use serde::Serialize;
 
 mod fields;
-
-use crate::episode::EpisodeResult;
-use crate::options::rule_values;
 
 /// The `format` field of every action log.
 pub const FORMAT: &str = "chopperscape-actions";
@@ -69,8 +67,42 @@ pub struct ActionLog {
     pub actions: Vec<u8>,
 }
 
+/// One played episode, as [`to_json`] writes it.
+#[derive(Debug, Clone, Copy)]
+pub struct Played<'a> {
+    /// The seed of `reset`.
+    pub seed: u64,
+    /// Agent steps taken.
+    pub steps: u32,
+    /// The episode return.
+    pub ret: i64,
+    /// `"bird"`, `"fuel"`, `"truncated"`, or `None` for an episode stopped before its end.
+    pub cause: Option<&'static str>,
+    /// Every action, 0..=4.
+    pub actions: &'a [u8],
+}
+
+/// Every rules option of `config` as `Config::set` name → value text (what an action log stores).
+pub fn rule_values(config: &Config) -> BTreeMap<String, String> {
+    let steps = config.max_episode_steps.map_or_else(|| "none".to_string(), |n| n.to_string());
+    [
+        ("lives", config.lives.to_string()),
+        ("bird_fuel_collision", config.bird_fuel_collision.as_str().to_string()),
+        ("alien_prob", config.alien_prob.to_string()),
+        ("frame_skip", config.frame_skip.to_string()),
+        ("sticky_prob", config.sticky_prob.to_string()),
+        ("bird_prob", config.bird_prob.to_string()),
+        ("fuel_prob", config.fuel_prob.to_string()),
+        ("max_fuel", config.max_fuel.to_string()),
+        ("max_episode_steps", steps),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
 /// Writes `episode`, played under `config` by `policy`, as an action log (JSON text).
-pub fn to_json(config: &Config, policy: &str, episode: &EpisodeResult) -> String {
+pub fn to_json(config: &Config, policy: &str, episode: &Played<'_>) -> String {
     let doc = Document {
         format: FORMAT,
         version: VERSION,
@@ -110,7 +142,9 @@ pub fn read(path: &Path) -> Result<ActionLog> {
 }
 
 /// Parses and checks the text of an action log (see [`read`]).
-#[cfg(test)]
+///
+/// # Errors
+/// As [`parse_bytes`].
 pub fn parse(text: &str) -> Result<ActionLog> {
     parse_bytes(text.as_bytes())
 }
@@ -119,7 +153,12 @@ pub fn parse(text: &str) -> Result<ActionLog> {
 ///
 /// The document is read straight into its fields (no JSON tree is built), so the memory it takes is about one
 /// byte per action beside the text itself.
-fn parse_bytes(bytes: &[u8]) -> Result<ActionLog> {
+///
+/// # Errors
+/// Text that is not JSON (or nested deeper than serde_json's limit of 128), another format, version or env,
+/// a field of the wrong type or out of range, an unknown option, an action outside 0..=4, or a `steps` field
+/// that disagrees with the actions.
+pub fn parse_bytes(bytes: &[u8]) -> Result<ActionLog> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let raw: fields::Raw = serde_json::from_slice(bytes).map_err(|e| {
         if e.is_syntax() || e.is_eof() {
@@ -134,13 +173,28 @@ fn parse_bytes(bytes: &[u8]) -> Result<ActionLog> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::episode::play_policy;
 
     fn sample() -> String {
         let mut config = Config::default();
         config.set("lives", "2").unwrap();
-        let ep = play_policy(&config, "random", 11, |_| Ok(())).unwrap();
+        let actions = [3, 3, 4, 0, 1, 2, 4];
+        let ep = Played { seed: 11, steps: 7, ret: 7, cause: None, actions: &actions };
         to_json(&config, "random", &ep)
+    }
+
+    #[test]
+    fn rule_values_round_trip_through_config_set() {
+        let mut c = Config::features();
+        for (n, v) in [("lives", "3"), ("alien_prob", "0.125"), ("sticky_prob", "0.1"), ("max_episode_steps", "none")] {
+            c.set(n, v).unwrap();
+        }
+        let values = rule_values(&c);
+        assert_eq!(values.len(), 9);
+        let mut back = Config::features();
+        for (n, v) in &values {
+            back.set(n, v).unwrap();
+        }
+        assert_eq!(back, c);
     }
 
     #[test]

@@ -1,0 +1,125 @@
+"""The training recipe under hostile input and faults: every setting checked before anything is written, an
+existing run refused unless --force, Ctrl-C saves the model atomically, and a NaN loss stops the run before the
+optimiser step."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
+from chopperscape import train  # noqa: E402
+
+#: A recipe that runs an update in a fraction of a second.
+SMALL = ["--num-envs", "4", "--num-steps", "32", "--hidden", "8", "--num-minibatches", "2", "--update-epochs", "1"]
+
+
+@pytest.fixture
+def no_training(monkeypatch):
+    """`train.train` replaced: a setting that reaches it was not refused."""
+    calls = []
+    monkeypatch.setattr(train, "train", lambda *a, **k: calls.append(a) or pathlib.Path("model.pt"))
+    return calls
+
+
+@pytest.mark.parametrize("args,named", [
+    (["--minutes", "nan"], "minutes"), (["--minutes", "-1"], "minutes"), (["--minutes", "inf"], "minutes"),
+    (["--steps", "0"], "steps"), (["--num-envs", "0"], "num_envs"), (["--seed", "-1"], "seed"),
+    (["--num-minibatches", "0"], "num_minibatches"), (["--num-minibatches", "100000"], "num_minibatches"),
+    (["--torch-threads", "0"], "torch_threads"), (["--env-threads", "0"], "env_threads"), (["--gamma", "1.5"], "gamma"),
+    (["--learning-rate", "nan"], "learning_rate"), (["--option", "obs_type=rgb"], "--obs-type"),
+    (["--option", "num_threads=2"], "--env-threads"), (["--option", "lives=0"], "lives"),
+])
+def test_bad_settings_are_refused_before_anything_is_written(args, named, tmp_path, no_training, capsys):
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as e:
+        train.main(["--out", str(out), *args])
+    assert e.value.code == 2 and named in capsys.readouterr().err
+    assert not no_training and not out.exists()
+
+
+def test_the_train_function_checks_its_arguments_too(tmp_path):
+    with pytest.raises(ValueError, match="num_envs"):
+        train.train(train.Recipe(num_envs=0, total_steps=100), tmp_path / "a")
+    with pytest.raises(ValueError, match="minutes"):
+        train.train(train.Recipe(total_steps=100), tmp_path / "a", minutes=float("nan"))
+    with pytest.raises(ValueError, match="total_steps"):
+        train.train(train.Recipe(total_steps=0), tmp_path / "a")
+    with pytest.raises(ValueError, match="network"):
+        train.train(train.Recipe(network="resnet", total_steps=100), tmp_path / "a")
+    with pytest.raises(ValueError, match="env option `num_threads`"):
+        train.train(train.Recipe(env_options={"num_threads": 2}, total_steps=100), tmp_path / "a")
+    assert not (tmp_path / "a").exists()
+
+
+def test_an_out_that_is_a_file_or_holds_a_run_is_refused_unless_force(tmp_path, no_training, capsys):
+    (tmp_path / "file").write_text("mine")
+    with pytest.raises(SystemExit):
+        train.main(["--out", str(tmp_path / "file"), "--steps", "100"])
+    assert "is not a folder" in capsys.readouterr().err and (tmp_path / "file").read_text() == "mine"
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "model.pt").write_bytes(b"the old model")
+    (run / "progress.csv").write_text("the old curve")
+    with pytest.raises(SystemExit):
+        train.main(["--out", str(run), "--steps", "100"])
+    err = capsys.readouterr().err
+    assert "already holds a run" in err and "--force" in err
+    assert (run / "model.pt").read_bytes() == b"the old model" and (run / "progress.csv").read_text() == "the old curve"
+    assert not no_training
+    assert train.main(["--out", str(run), "--steps", "100", "--force"]) == 0
+    assert no_training
+
+
+def test_force_starts_the_run_over(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "progress.csv").write_text("the old curve")
+    assert train.main(["--out", str(run), "--steps", "256", "--force", *SMALL]) == 0
+    assert (run / "progress.csv").read_text().startswith("env_steps,")
+    assert torch.load(run / "model.pt", weights_only=True)["env_steps"] >= 256
+
+
+def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_path):
+    run = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "chopperscape.train", "--out", str(run), "--minutes", "5", *SMALL],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        csv = run / "progress.csv"
+        if csv.exists() and len(csv.read_text().splitlines()) >= 3:
+            break
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "is saved in" in err, err
+    model = torch.load(run / "model.pt", weights_only=True)
+    assert model["env_steps"] > 0
+    assert sorted(os.listdir(run)) == ["model.pt", "progress.csv", "recipe.json"]
+
+
+def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatch):
+    made = []
+
+    class Poisoned(train.Agent):
+        def __init__(self, *a):
+            super().__init__(*a)
+            made.append(self)
+
+        def value(self, x):
+            return super().value(x) * float("nan")
+
+    monkeypatch.setattr(train, "Agent", Poisoned)
+    recipe = train.Recipe(num_envs=4, num_steps=32, hidden=8, num_minibatches=2, total_steps=10_000)
+    with pytest.raises(FloatingPointError, match="loss became nan"):
+        train.train(recipe, tmp_path / "run")
+    (agent,) = made
+    assert all(torch.isfinite(p).all() for p in agent.parameters()), "the optimiser stepped with a NaN loss"
