@@ -351,7 +351,6 @@ def _metadata(dataset_id: str, algorithm: str, options: dict, max_episode_steps:
         "dataset_id": dataset_id,
         "minari_version": minari.__version__,
         "algorithm_name": algorithm,
-        "code_permalink": "https://github.com/chopperscape/chopperscape",
         "requirements": [f"chopperscape=={_core.__version__}"],
         "chopperscape_version": _core.__version__,
         "features_version": _core.FEATURES_VERSION,

@@ -3,7 +3,7 @@
     python -m chopperscape.plot runs/ppo/progress.csv runs/rllib/progress.csv --out docs/learning_curve.png \\
         --label "PPO recipe" --label "RLlib PPO" --hline random=600 --hline heuristic=5750
 
-Each CSV has the columns ``env_steps,wall_s,episodes,mean_return,std_return,mean_length``. The left panel plots the
+Each CSV is a progress CSV (:mod:`chopperscape.progress`; the return columns are enough). The left panel plots the
 mean return (last 100 episodes, with ± one std as a band) against env steps, the right one against wall-clock
 minutes. Needs matplotlib.
 """
@@ -11,28 +11,10 @@ minutes. Needs matplotlib.
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 
-COLUMNS = ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
-
-
-def read(path: Path) -> dict[str, list[float]]:
-    """The columns of one progress CSV as float lists; `ValueError` naming the file if a column is missing."""
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        raise ValueError(f"{path}: no rows")
-    missing = [c for c in COLUMNS if c not in rows[0]]
-    if missing:
-        raise ValueError(f"{path}: missing columns {missing} (expected {','.join(COLUMNS)})")
-    # Rows before the first finished episode have no returns yet (chopperscape.train writes every update).
-    rows = [r for r in rows if r["mean_return"] != ""]
-    if not rows:
-        raise ValueError(f"{path}: no finished episode yet")
-    return {c: [float(r[c]) for r in rows] for c in COLUMNS}
-
+from .progress import read
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m chopperscape.plot", description=__doc__.splitlines()[0])

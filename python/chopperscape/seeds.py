@@ -27,7 +27,6 @@ reproducible.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import subprocess
@@ -37,6 +36,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from . import progress
 
 #: Held-out evaluation: 100 episodes from seed 1,000,000 (training seeds are small numbers).
 EVAL_EPISODES, EVAL_SEED = 100, 1_000_000
@@ -147,9 +148,8 @@ def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
 
 
 def _curve(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    with open(path, newline="") as f:
-        rows = [r for r in csv.DictReader(f) if r["mean_return"] != ""]
-    return (np.array([float(r["env_steps"]) for r in rows]), np.array([float(r["mean_return"]) for r in rows]))
+    cols = progress.read(path, ("env_steps", "mean_return"))
+    return np.array(cols["env_steps"]), np.array(cols["mean_return"])
 
 
 def summarise(results: dict[int, dict[str, Any]], baselines: dict[str, dict[str, Any]], steps: int) -> dict[str, Any]:

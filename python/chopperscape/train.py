@@ -27,7 +27,6 @@ reached so far atomically, and exits with 130, 143, 129.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -48,18 +47,13 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.train needs PyTorch: pip install torch (the CPU build is enough)"
     ) from err
 
-from . import FEATURES_VERSION, PIXELS_VERSION, _signals
+from . import FEATURES_VERSION, PIXELS_VERSION, _signals, progress
 from ._checks import check_bool, number_in, pilot_seed, positive_int
 from ._cli import ENV_OPTIONS, env_options, print_line
 from .vector import VectorEnv
 
-#: Columns of the progress CSV. The first six are shared with the RLlib example and the plot script; the rest are
-#: the update's diagnostics (means over its minibatches) and the end causes of the episodes that ended in it.
-CSV_COLUMNS = [
-    "env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length",
-    "learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss",
-    "ended", "bird", "fuel", "limit",
-]
+#: Columns of the progress CSV (the schema and its meaning: :mod:`chopperscape.progress`).
+CSV_COLUMNS = list(progress.COLUMNS)
 
 #: The recipe's settings that the command line exposes as flags (``--num-envs`` …).
 RECIPE_FLAGS = (
@@ -496,9 +490,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "recipe.json", "w") as f:
         json.dump(asdict(recipe), f, indent=2)
-    csv_file = open(csv_path, "w", newline="")
-    writer = csv.writer(csv_file)
-    writer.writerow(CSV_COLUMNS)
+    writer = progress.Writer(csv_path)
     update = 0
     stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
     try:
@@ -601,18 +593,21 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             rets = np.array([r for r, _ in finished])
             lens = np.array([l for _, l in finished])
             ended = sum(ends.values())
-            shares = [f"{ends[k] / ended:.3f}" if ended else "" for k in ("bird", "fuel", "limit")]
             m = stats[:5] / max(stats[5], 1)
-            returns_cols = [f"{rets.mean():.1f}", f"{rets.std():.1f}", f"{lens.mean():.1f}"] if finished else [""] * 3
-            writer.writerow(
-                [env_steps, f"{time.monotonic() - start:.1f}", episodes, *returns_cols, f"{lr:.6g}", f"{m[0]:.4f}",
-                 f"{m[1]:.5f}", f"{m[2]:.4f}", f"{explained:.4f}", f"{m[3]:.5f}", f"{m[4]:.5f}", ended, *shares]
-            )
-            csv_file.flush()
+            row = {"env_steps": env_steps, "wall_s": f"{time.monotonic() - start:.1f}", "episodes": episodes,
+                   "learning_rate": f"{lr:.6g}", "entropy": f"{m[0]:.4f}", "approx_kl": f"{m[1]:.5f}",
+                   "clip_frac": f"{m[2]:.4f}", "explained_var": f"{explained:.4f}", "value_loss": f"{m[3]:.5f}",
+                   "policy_loss": f"{m[4]:.5f}", "ended": ended}
+            if finished:
+                row.update(mean_return=f"{rets.mean():.1f}", std_return=f"{rets.std():.1f}",
+                           mean_length=f"{lens.mean():.1f}")
+            if ended:
+                row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
+            writer.row(row)
             if update % 50 == 0:
                 save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     finally:
-        csv_file.close()
+        writer.close()
         envs.close()
         stop.restore()
     save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)

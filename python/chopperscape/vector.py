@@ -17,14 +17,13 @@ from ._spaces import batched_box, channel_axis, observation_box
 _CAUSES = np.array([None, *_core.CAUSE_NAMES[1:]], dtype=object)
 
 
-def default_threads(num_envs: int) -> int:
-    """One thread, unless asked for more with `num_threads`.
-
-    Measured on the 2-vCPU machines this is developed on (python/README.md, "Threads"): a second thread wins only
-    for large batches on an idle host, and loses badly (up to 4× slower) when anything else wants the CPU, which is
-    the usual case while a learner trains beside the env. `os.sched_getaffinity` says how many CPUs this process
-    may use; pass `num_threads` up to that for N ≥ 1024 after measuring with `python/bench.py`."""
-    return 1
+#: Worker threads when `num_threads` is not given: one, whatever the batch size.
+#:
+#: Measured on the 2-vCPU machines this is developed on (python/README.md, "Threads"): a second thread wins only
+#: for large batches on an idle host, and loses badly (up to 4× slower) when anything else wants the CPU, which is
+#: the usual case while a learner trains beside the env. `os.sched_getaffinity` says how many CPUs this process
+#: may use; pass `num_threads` up to that for N ≥ 1024 after measuring with `python/bench.py`.
+DEFAULT_THREADS = 1
 
 
 class VectorEnv(gym.vector.VectorEnv):
@@ -35,7 +34,7 @@ class VectorEnv(gym.vector.VectorEnv):
 
     | Argument | Default | Meaning |
     |----------|---------|---------|
-    | `num_threads` | 1 | worker threads (results do not depend on it); more pay only for large batches on idle cores (see `default_threads`) |
+    | `num_threads` | 1 | worker threads (results do not depend on it); more pay only for large batches on idle cores (see `DEFAULT_THREADS`) |
     | `copy` | `True` | `True`: every call returns fresh arrays. `False`: every call returns *the same* preallocated arrays, read-only (`writeable=False`), overwritten by the next `step`/`reset` (copy what you keep: pixel observations are drawn incrementally onto the previous frame). A bool |
     | `autoreset_mode` | `AutoresetMode.NEXT_STEP` | or `AutoresetMode.SAME_STEP` (final observations in `info["final_obs"]`) |
     | `max_episode_steps` | 10000 | truncation, exactly as Gymnasium's `TimeLimit`; `None` never truncates |
@@ -71,7 +70,7 @@ class VectorEnv(gym.vector.VectorEnv):
     ):
         num_envs = positive_int("num_envs", num_envs)
         if num_threads is None:
-            num_threads = default_threads(num_envs)
+            num_threads = DEFAULT_THREADS
         num_threads = positive_int("num_threads", num_threads)
         try:
             autoreset_mode = AutoresetMode(autoreset_mode)

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """PPO on ChopperScape-v0 with Ray RLlib (new API stack), on this machine or on a Ray cluster.
 
-    python python/examples/rllib_ppo.py --minutes 10 --csv rllib_ppo.csv             # a local Ray
-    ray start --head ...; python python/examples/rllib_ppo.py --address auto ...     # join a running cluster
+    python python/examples/rllib_ppo.py --minutes 10                    # a local Ray
+    ray start --head ...; python python/examples/rllib_ppo.py --address auto ...  # join a running cluster
 
 Each env runner is a separate process (a Ray actor) that steps `--envs-per-runner` games: by default one native
 `chopperscape.VectorEnv` (one Rust call a batch), or with `--python-envs` as many Python envs in RLlib's
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import collections
-import csv
 import hashlib
 import json
 import math
@@ -29,7 +28,6 @@ import sys
 import time
 from typing import Any
 
-CSV_COLUMNS = ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
 #: Episodes the mean and std of each row are taken over.
 WINDOW = 100
 _FINISHED = "_chopperscape_finished"
@@ -46,7 +44,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--address", default=None, help="Ray cluster to join ('auto', or host:port); default: a local Ray")
     p.add_argument("--minutes", type=float, default=30.0, help="training time (stops after the iteration past it)")
     p.add_argument("--iterations", type=int, default=None, help="stop after this many iterations (also)")
-    p.add_argument("--csv", default="rllib_ppo.csv", help="learning curve, one row per iteration (overwritten)")
+    p.add_argument("--csv", default="runs/rllib-ppo/progress.csv",
+                   help="learning curve, one row per iteration (overwritten; default runs/rllib-ppo/progress.csv)")
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--native", dest="native", action="store_true", default=True,
                       help="one native VectorEnv per runner (default)")
@@ -274,6 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
     torch.set_num_threads(args.torch_threads)
     import chopperscape.rllib
+    from chopperscape import progress
 
     try:
         chopperscape.rllib.check_env_config(args.env_config)
@@ -295,13 +295,8 @@ def main(argv: list[str] | None = None) -> int:
     episodes = 0
     env_steps = 0
     iterations = 0
-    csv_dir = os.path.dirname(os.path.abspath(args.csv))
-    os.makedirs(csv_dir, exist_ok=True)
     start = time.monotonic()
-    with open(args.csv, "w", newline="") as f:
-        out = csv.writer(f)
-        out.writerow(CSV_COLUMNS)
-        f.flush()
+    with progress.Writer(args.csv, progress.RETURNS) as out:
         while True:
             result = algo.train()
             iterations += 1
@@ -317,8 +312,8 @@ def main(argv: list[str] | None = None) -> int:
                 mean = sum(returns) / len(returns)
                 std = math.sqrt(sum((r - mean) ** 2 for r in returns) / len(returns))
                 length = sum(n for _, n in window) / len(window)
-                out.writerow([env_steps, f"{wall:.2f}", episodes, f"{mean:.3f}", f"{std:.3f}", f"{length:.1f}"])
-                f.flush()
+                out.row({"env_steps": env_steps, "wall_s": f"{wall:.2f}", "episodes": episodes,
+                         "mean_return": f"{mean:.3f}", "std_return": f"{std:.3f}", "mean_length": f"{length:.1f}"})
             else:
                 mean = std = length = math.nan
             print(f"iter {iterations:4d}  steps {env_steps:9d}  episodes {episodes:6d}  "

@@ -7,14 +7,13 @@
 observations and rewards normalised by ``VecNormalize``). The model is saved as ``OUT/model.zip`` (and, with
 ``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
 ``python -m chopperscape.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
-training with ``VecNormalize.load``); ``progress.csv`` has the columns
-``env_steps,wall_s,episodes,mean_return,std_return,mean_length``, drawn by ``python -m chopperscape.plot``.
+training with ``VecNormalize.load``); ``progress.csv`` has the return columns of
+:mod:`chopperscape.progress`, drawn by ``python -m chopperscape.plot``.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
+from chopperscape import progress
 from chopperscape.sb3 import ChopperScapeVecEnv, save_normalization
 
 
@@ -37,9 +37,7 @@ class ProgressCsv(BaseCallback):
         self.episodes = 0
 
     def _on_training_start(self) -> None:
-        self.file = open(self.path, "w", newline="")
-        self.writer = csv.writer(self.file)
-        self.writer.writerow(["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"])
+        self.writer = progress.Writer(self.path, progress.RETURNS)
 
     def _on_step(self) -> bool:
         self.episodes += sum("episode" in i for i in self.locals["infos"])
@@ -50,12 +48,12 @@ class ProgressCsv(BaseCallback):
         if eps:
             r = np.array([e["r"] for e in eps])
             length = np.array([e["l"] for e in eps])
-            self.writer.writerow([self.num_timesteps, f"{time.monotonic() - self.start:.1f}", self.episodes,
-                                  f"{r.mean():.1f}", f"{r.std():.1f}", f"{length.mean():.1f}"])
-            self.file.flush()
+            self.writer.row({"env_steps": self.num_timesteps, "wall_s": f"{time.monotonic() - self.start:.1f}",
+                             "episodes": self.episodes, "mean_return": f"{r.mean():.1f}",
+                             "std_return": f"{r.std():.1f}", "mean_length": f"{length.mean():.1f}"})
 
     def _on_training_end(self) -> None:
-        self.file.close()
+        self.writer.close()
 
 
 def main() -> None:

@@ -44,8 +44,12 @@ def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     assert {k: first[k] for k in first if k != "per_episode"} == {k: second[k] for k in first}
     assert first["episodes"] == 3 and sum(first["causes"].values()) == pytest.approx(1.0, abs=0.01)
     assert [e["seed"] for e in second["per_episode"]] == [77, 78, 79]
-    # max_fuel=200 came from the model: no episode outlives its fuel without a tank.
-    assert all(e["steps"] <= 200 or e["return"] > 0 for e in second["per_episode"])
+    # max_fuel=200 came from the model: evaluate plays under the options the model was trained with, and giving
+    # them again explicitly changes nothing.
+    _, options = evaluate.load_recipe(path, False, 0, {})
+    assert options["max_fuel"] == 200
+    assert evaluate.main([str(path), "--episodes", "3", "--seed", "77", "--per-episode", "--option", "max_fuel=200"]) == 0
+    assert json.loads(capsys.readouterr().out) == second
 
 
 def _progress(path):
@@ -300,8 +304,10 @@ def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
     again = PPO.load(tmp_path / "ppo", device="cpu")
     obs = env.reset()
     assert np.array_equal(model.predict(obs, deterministic=True)[0], again.predict(obs, deterministic=True)[0])
-    mean, _ = evaluate_policy(again, env, n_eval_episodes=4)
-    assert mean > 0
+    returns, lengths = evaluate_policy(again, env, n_eval_episodes=4, return_episode_rewards=True, warn=False)
+    # Whole episodes reach SB3: +1 a step, and a bird hit pays -10 in place of the +1 (lives=1); never past the fuel
+    # cap without a tank, so every episode ends by a bird (length - 11) or with its fuel (the return is its length).
+    assert len(returns) == 4 and all(r in (n, n - 11) for r, n in zip(returns, lengths)), (returns, lengths)
 
 
 @needs_sb3
@@ -333,8 +339,9 @@ def test_gymnasium_vector_wrappers_on_the_native_batch():
     obs, _ = wrapped.reset(seed=3)
     assert obs.shape == (4, envs.single_observation_space.shape[0])
     finished = 0
+    rng = np.random.default_rng(0)
     for _ in range(300):
-        obs, rew, term, trunc, info = wrapped.step(np.random.default_rng(0).integers(0, 5, 4))
+        obs, rew, term, trunc, info = wrapped.step(rng.integers(0, 5, 4))
         assert np.isfinite(obs).all() and np.isfinite(rew).all() and (np.abs(rew) <= 5).all()
         if "episode" in info:
             finished += int(info["_episode"].sum())
@@ -387,7 +394,7 @@ def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
 
 
 @needs_sb3
-def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys):
+def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, monkeypatch):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -405,3 +412,28 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys):
     assert evaluate.main(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["episodes"] == 2 and set(out["causes"]) <= {"bird", "fuel", "truncated"} and out["greedy"]
+    # The statistics are applied: the normaliser evaluate loads is VecNormalize's own transform, and every
+    # observation the model acts on went through it.
+    from chopperscape import sb3
+
+    norm = sb3.load_normalization(tmp_path, False)
+    obs = env.get_original_obs()
+    assert norm is not None and np.allclose(norm(obs), env.normalize_obs(obs), atol=1e-6)
+    seen: list[tuple[int, ...]] = []
+    original = sb3.load_normalization
+
+    def spying(folder, trust_pickle=False):
+        inner = original(folder, trust_pickle)
+        assert inner is not None
+
+        def apply(o):
+            seen.append(o.shape)
+            return inner(o)
+
+        return apply
+
+    monkeypatch.setattr(sb3, "load_normalization", spying)
+    assert evaluate.main(args) == 0
+    assert json.loads(capsys.readouterr().out) == out
+    # One call per decision, on the batch of raw features (the policy never acts on an unnormalised observation).
+    assert all(shape[1:] == (46,) for shape in seen) and len(seen) >= out["mean_steps"]

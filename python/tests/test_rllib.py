@@ -31,6 +31,7 @@ pytest.importorskip("torch", reason="torch is not installed (RLlib's PPO needs i
 
 import chopperscape  # noqa: E402
 import chopperscape.rllib as crl  # noqa: E402
+from chopperscape import progress  # noqa: E402
 import gymnasium as gym  # noqa: E402
 from ray.rllib.algorithms.ppo import PPOConfig  # noqa: E402
 from ray.rllib.env.env_context import EnvContext  # noqa: E402
@@ -258,7 +259,7 @@ def _train(cluster, out: Path, name: str, *extra: str) -> tuple[dict, list[dict]
     assert run.returncode == 0, f"{' '.join(cmd)} failed:\n{run.stdout[-3000:]}\n{run.stderr[-6000:]}"
     with open(csv_path, newline="") as f:
         reader = csv.DictReader(f)
-        assert reader.fieldnames == ["env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length"]
+        assert reader.fieldnames == list(progress.RETURNS)
         rows = list(reader)
     return json.loads(summary_path.read_text()), rows
 

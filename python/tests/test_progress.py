@@ -1,0 +1,60 @@
+"""The progress CSV schema (chopperscape.progress): what every learner writes and plot/seeds read."""
+
+import math
+
+import pytest
+
+from chopperscape import progress
+
+
+def test_a_writer_writes_the_header_and_flushes_every_row(tmp_path):
+    path = tmp_path / "deep" / "progress.csv"
+    w = progress.Writer(path)
+    assert path.read_text() == ",".join(progress.COLUMNS) + "\n"
+    w.row({"env_steps": 10, "wall_s": "0.5", "episodes": 0, "entropy": "1.6"})
+    # Flushed before close: a crashed run keeps its rows. Missing columns are blank.
+    lines = path.read_text().splitlines()
+    assert len(lines) == 2
+    row = dict(zip(progress.COLUMNS, lines[1].split(",")))
+    assert row["env_steps"] == "10" and row["entropy"] == "1.6" and row["mean_return"] == "" and row["bird"] == ""
+    with pytest.raises(KeyError, match="entropyy"):
+        w.row({"env_steps": 11, "entropyy": 1})
+    assert len(path.read_text().splitlines()) == 2
+    w.close()
+
+
+def test_a_writer_refuses_columns_outside_the_schema(tmp_path):
+    with pytest.raises(ValueError, match="must start with"):
+        progress.Writer(tmp_path / "a.csv", ["wall_s", "env_steps"])
+    with pytest.raises(ValueError, match="mean_reward"):
+        progress.Writer(tmp_path / "b.csv", [*progress.RETURNS, "mean_reward"])
+    assert not (tmp_path / "a.csv").exists() and not (tmp_path / "b.csv").exists()
+
+
+def test_read_skips_rows_without_returns_and_names_bad_files(tmp_path):
+    path = tmp_path / "p.csv"
+    with progress.Writer(path) as w:
+        w.row({"env_steps": 100, "wall_s": "1.0", "episodes": 0})
+        w.row({"env_steps": 200, "wall_s": "2.0", "episodes": 3, "mean_return": "50.5", "std_return": "1.0",
+               "mean_length": "40.0", "ended": 3, "bird": "1.000"})
+    cols = progress.read(path, ("env_steps", "mean_return", "fuel", "bird"))
+    assert cols["env_steps"] == [200.0] and cols["mean_return"] == [50.5] and cols["bird"] == [1.0]
+    assert math.isnan(cols["fuel"][0])
+    # The examples' files (the return columns only) read the same way.
+    short = tmp_path / "short.csv"
+    with progress.Writer(short, progress.RETURNS) as w:
+        w.row({"env_steps": 1, "wall_s": "0.1", "episodes": 1, "mean_return": "9", "std_return": "0",
+               "mean_length": "9"})
+    assert progress.read(short)["mean_length"] == [9.0]
+    with pytest.raises(ValueError, match="missing columns"):
+        progress.read(short, ("entropy",))
+    (tmp_path / "empty.csv").write_text("")
+    with pytest.raises(ValueError, match="empty.csv: no rows"):
+        progress.read(tmp_path / "empty.csv")
+    (tmp_path / "nothing.csv").write_text(",".join(progress.COLUMNS) + "\n1,0.1,0" + "," * (len(progress.COLUMNS) - 3)
+                                          + "\n")
+    with pytest.raises(ValueError, match="no finished episode"):
+        progress.read(tmp_path / "nothing.csv")
+    (tmp_path / "text.csv").write_text("env_steps,wall_s,episodes,mean_return,std_return,mean_length\nx,1,1,1,1,1\n")
+    with pytest.raises(ValueError, match="text.csv: not a progress CSV"):
+        progress.read(tmp_path / "text.csv")
