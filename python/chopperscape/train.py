@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium.wrappers.utils import RunningMeanStd as _GymRunningMeanStd
 
 try:
     import torch
@@ -190,20 +191,12 @@ def check_run_folder(out: Path, force: bool = False) -> None:
         )
 
 
-class RunningMeanStd:
-    """Running mean and variance (Chan et al.), as Gymnasium's and SB3's normalisers keep them."""
+class RunningMeanStd(_GymRunningMeanStd):
+    """Gymnasium's running mean and variance (Chan et al.'s parallel update, the one its and SB3's normalisers keep),
+    with its state as plain data for checkpoints."""
 
     def __init__(self, shape: tuple[int, ...] = ()):
-        self.mean = np.zeros(shape, np.float64)
-        self.var = np.ones(shape, np.float64)
-        self.count = 1e-4
-
-    def update(self, x: np.ndarray) -> None:
-        batch_mean, batch_var, n = x.mean(axis=0), x.var(axis=0), x.shape[0]
-        delta, total = batch_mean - self.mean, self.count + n
-        self.mean = self.mean + delta * n / total
-        m2 = self.var * self.count + batch_var * n + delta**2 * self.count * n / total
-        self.var, self.count = m2 / total, total
+        super().__init__(shape=shape)
 
     def state(self) -> dict[str, Any]:
         return {"mean": self.mean.tolist(), "var": self.var.tolist(), "count": float(self.count)}
