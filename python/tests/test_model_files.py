@@ -87,7 +87,7 @@ def test_a_model_whose_input_does_not_fit_the_options_is_a_clear_error(tmp_path,
     train.save(tmp_path / "model.pt", train.Agent(46, 5, 8), train.ObsNormalizer((46,)), train.Recipe(hidden=8), (46,), 0)
     assert evaluate(tmp_path / "model.pt", "--episodes", "1", "--option", "frame_stack=2") == 2
     err = capsys.readouterr().err
-    assert "takes observations of 46 values" in err and "(92,)" in err and "Traceback" not in err, err
+    assert "takes observations of shape (46,)" in err and "(92,)" in err and "Traceback" not in err, err
     # A payload with the right format but damaged fields names the field.
     import torch
 
