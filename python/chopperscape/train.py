@@ -80,6 +80,9 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_rate": 2.5e-4,
     },
 }
+#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 8× the envs, so that each
+#: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
+PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
 #: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core.
 DEFAULT_STEPS = 15_000_000
@@ -132,6 +135,27 @@ RUN_FILES = ("model.pt", "progress.csv", "recipe.json")
 NETWORKS = ("auto", "mlp", "small", "nature")
 
 
+def check_device(device: Any) -> None:
+    """`ValueError` unless `device` names a torch device that this process can use ('cpu', 'cuda', 'cuda:1', 'mps')."""
+    allowed = "allowed a torch device such as 'cpu', 'cuda', 'cuda:0'"
+    if not isinstance(device, str) or not device:
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed}")
+    try:
+        d = torch.device(device)
+    except (RuntimeError, ValueError):
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed}") from None
+    if d.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(f"device {device!r}: torch sees no CUDA GPU here (torch.cuda.is_available() is False; "
+                             "a CPU-only torch build, or no driver): use --device cpu")
+        if d.index is not None and d.index >= torch.cuda.device_count():
+            raise ValueError(f"device {device!r}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")
+    elif d.type == "mps" and not torch.backends.mps.is_available():
+        raise ValueError(f"device {device!r}: torch sees no MPS device here: use --device cpu")
+    elif d.type not in ("cpu", "cuda", "mps"):
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed} (or 'mps')")
+
+
 def check_recipe(recipe: Recipe) -> None:
     """`ValueError` naming the first setting of `recipe` that is out of range (before anything is written)."""
     r = recipe
@@ -160,8 +184,7 @@ def check_recipe(recipe: Recipe) -> None:
         raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
     if r.network not in NETWORKS:
         raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
-    if not isinstance(r.device, str) or not r.device:
-        raise ValueError(f"invalid value {r.device!r} for option `device`: allowed a torch device such as 'cpu', 'cuda'")
+    check_device(r.device)
     if not isinstance(r.env_options, dict):
         raise ValueError(f"invalid value {r.env_options!r} for option `env_options`: allowed a dict of env options")
     for name in r.env_options:
@@ -628,7 +651,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="an env option, e.g. --option frame_skip=4 (JSON values)")
     p.add_argument("--preset", choices=sorted(PRESETS), default="features",
-                   help="recipe preset: features (the default) or pixels (grayscale frames, a CNN); flags override it")
+                   help="recipe preset: features (the default), pixels (grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it")
     defaults = Recipe()
     for f in RECIPE_FLAGS:
         p.add_argument(f"--{f.replace('_', '-')}", type=type(getattr(defaults, f)), default=None,

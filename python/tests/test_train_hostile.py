@@ -35,6 +35,7 @@ def no_training(monkeypatch):
     (["--torch-threads", "0"], "torch_threads"), (["--env-threads", "0"], "env_threads"), (["--gamma", "1.5"], "gamma"),
     (["--learning-rate", "nan"], "learning_rate"), (["--option", "obs_type=rgb"], "--obs-type"),
     (["--option", "num_threads=2"], "--env-threads"), (["--option", "lives=0"], "lives"),
+    (["--device", "banana"], "device"), (["--device", "tpu"], "device"), (["--device", "cuda:99"], "cuda:99"),
 ])
 def test_bad_settings_are_refused_before_anything_is_written(args, named, tmp_path, no_training, capsys):
     out = tmp_path / "run"
@@ -123,3 +124,22 @@ def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatc
         train.train(recipe, tmp_path / "run")
     (agent,) = made
     assert all(torch.isfinite(p).all() for p in agent.parameters()), "the optimiser stepped with a NaN loss"
+
+
+def test_a_cuda_device_without_a_gpu_is_refused_with_the_reason(tmp_path, no_training, capsys):
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a CUDA GPU")
+    with pytest.raises(SystemExit) as e:
+        train.main(["--out", str(tmp_path / "run"), "--preset", "pixels-large", "--device", "cuda"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "torch sees no CUDA GPU" in err and "--device cpu" in err and not no_training
+
+
+def test_the_large_pixel_preset_is_the_pixel_recipe_with_a_bigger_batch(tmp_path, no_training):
+    assert train.main(["--out", str(tmp_path / "a"), "--preset", "pixels"]) == 0
+    assert train.main(["--out", str(tmp_path / "b"), "--preset", "pixels-large", "--num-minibatches", "16"]) == 0
+    small, large = no_training[0][0], no_training[1][0]
+    assert (large.num_envs, large.num_minibatches, large.env_threads) == (256, 16, 2)
+    same = {k: v for k, v in vars(small).items() if k not in ("num_envs", "num_minibatches", "env_threads")}
+    assert same == {k: v for k, v in vars(large).items() if k in same}
+    assert large.env_options == {"obs_size": [84, 84], "frame_stack": 4, "frame_skip": 4}
