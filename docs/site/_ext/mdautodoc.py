@@ -10,7 +10,7 @@ body is the docstring, parsed by MyST. Use it from a MyST page:
     :members: reset, step, render
     ```
 
-`:members:` with no value documents every public member defined on the class itself that has a docstring; a
+A module gives its docstring as text. `:members:` with no value documents every public member defined on the class itself that has a docstring; a
 comma-separated list documents those. A Markdown heading in a docstring (`## Rewards`) becomes a rubric.
 """
 
@@ -134,7 +134,9 @@ class AutodocMd(SphinxDirective):
         name = self.arguments[0].rsplit(".", 1)[-1]
         colons = ":" * 6
         lines: list[str] = []
-        if inspect.isclass(obj):
+        if inspect.ismodule(obj):
+            lines += _body(obj)
+        elif inspect.isclass(obj):
             init = obj.__init__ if "__init__" in obj.__dict__ else obj
             lines += [f"{colons}{{py:class}} {name}{_signature(init, True)}", f":module: {module}", ""]
             lines += _body(obj)
