@@ -40,6 +40,7 @@ nitpicky = False
 html_theme = "furo"
 html_title = f"ChopperScape {release}"
 html_static_path = ["_static"]
+html_css_files = ["custom.css"]
 html_last_updated_fmt = None
 # The rustdoc of the core and vector crates, when `cargo doc` built it (scripts/test-dist.sh does): served at
 # rustdoc/.
