@@ -5,7 +5,8 @@
 #   3. `auditwheel show` agrees with each wheel's manylinux_2_17 tag, and no ELF file in a wheel needs a glibc
 #      symbol newer than GLIBC_2.17 (fails as soon as one creeps in);
 #   4. both wheels installed into a fresh venv with no Rust toolchain on PATH: scripts/dist/smoke_test.py (make,
-#      step, check_env, the vector env, pilots, the `chopperscape` command) under pytest, run outside the repository;
+#      step, check_env, the vector env, pilots, the `chopperscape` command) under pytest, run outside the repository,
+#      with python3 and with CPython 3.9 and 3.13 where installed (the abi3 wheel's oldest and newest claimed);
 #   5. the sdist unpacked into target/dist-sdist/src and installed by pip into a fresh venv (it builds with cargo,
 #      into target/dist-sdist, so a second run rebuilds only what changed), then imported and stepped;
 #   6. the documentation site (docs/site, Sphinx + MyST) built with warnings as errors into docs/site/_build, in
@@ -81,28 +82,49 @@ for whl in "$wheel" "$cli_wheel"; do
   checks=$((checks + 1))
 done
 
-# 4. The wheels in a fresh venv, no cargo or rustc on PATH, run from outside the repository.
-python3 -m venv "$work/wheel-venv"
-if ! quiet "$work/wheel-venv/bin/python" "${PIP[@]}" "$wheel" "$cli_wheel" "pytest>=7"; then
-  say "skipped: the wheel smoke test (the wheels' dependencies could not be installed from PyPI)"
-else
-  clean_path="$work/wheel-venv/bin:/usr/local/bin:/usr/bin:/bin"
+# 4. The wheels in a fresh venv, no cargo or rustc on PATH, run from outside the repository: with python3, and with
+# the oldest and newest CPython the wheel claims (3.9, 3.13) where they are installed (pyenv's too).
+find_python() {  # find_python 3.9: a working interpreter of that version, or nothing
+  local v=$1 exe
+  for exe in "python$v" "$(pyenv root 2>/dev/null)"/versions/"$v".*/bin/python; do
+    if "$exe" -c 'import sys, venv; assert sys.version_info[:2] == tuple(map(int, sys.argv[1].split(".")))' "$v" \
+      >/dev/null 2>&1; then
+      command -v "$exe"
+      return 0
+    fi
+  done
+}
+cp scripts/dist/smoke_test.py "$work/"
+smoke() {  # smoke PYTHON: the smoke test in a fresh venv of that interpreter
+  local py=$1 venv log clean_path tool
+  venv="$work/wheel-venv-$(basename "$py")"
+  quiet "$py" -m venv "$venv"
+  if ! quiet "$venv/bin/python" "${PIP[@]}" "$wheel" "$cli_wheel" "pytest>=7"; then
+    say "skipped: the wheel smoke test with $py (the wheels' dependencies could not be installed from PyPI)"
+    return 0
+  fi
+  clean_path="$venv/bin:/usr/local/bin:/usr/bin:/bin"
   for tool in cargo rustc; do
     if PATH=$clean_path command -v "$tool" >/dev/null 2>&1; then
       say "FAILED: $tool is on the restricted PATH ($clean_path); the smoke test needs a PATH without Rust"
       exit 1
     fi
   done
-  cp scripts/dist/smoke_test.py "$work/"
   log="$work/smoke.log"
-  if (cd "$work" && env -i HOME="$HOME" PATH="$clean_path" LANG=C.UTF-8 "$work/wheel-venv/bin/python" -m pytest -q \
+  if (cd "$work" && env -i HOME="$HOME" PATH="$clean_path" LANG=C.UTF-8 "$venv/bin/python" -m pytest -q \
     -p no:cacheprovider -W error smoke_test.py >"$log" 2>&1); then
     grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
   else
+    say "FAILED: the wheel smoke test with $py:"
     cat "$log" >&2
     exit 1
   fi
-fi
+}
+smoke "$(command -v python3)"
+for v in 3.9 3.13; do
+  py=$(find_python "$v")
+  if [ -n "$py" ]; then smoke "$py"; else say "skipped: the wheel smoke test with Python $v (not installed)"; fi
+done
 
 # 5. The sdist, built from its own files only. Its tree is kept at a fixed path and updated file by file (files
 # that did not change keep their times), so cargo rebuilds only what changed since the last run.

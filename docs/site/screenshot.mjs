@@ -23,7 +23,7 @@ try {
   page.on("pageerror", (e) => errors.push(String(e)));
   page.on("requestfailed", (r) => errors.push(`failed: ${r.url()}`));
   await page.goto(pathToFileURL(page_file).href, { waitUntil: "load" });
-  // The GIF's first frame, not whichever frame the clock reached.
+  // Wait until every image is decoded (the GIF shows whichever frame it reached: the picture differs run to run).
   await page.evaluate(() => Promise.all([...document.images].map((i) => i.decode().catch(() => {}))));
   if (errors.length) throw new Error(errors.join("; "));
   const tmp = `${out}.tmp.png`;
