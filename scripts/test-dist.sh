@@ -59,7 +59,8 @@ checks=$((checks + 1))
 glibc_floor=2.17
 for whl in "$wheel" "$cli_wheel"; do
   report=$(.venv-dist/bin/auditwheel show "$whl" 2>&1) || { say "$report"; exit 1; }
-  if ! tr -s ' \n' ' ' <<<"$report" | grep -q 'consistent with the following platform tag: "manylinux_2_17_x86_64"'; then
+  verdict='consistent with the following platform tag: "manylinux_2_17_x86_64"'
+  if ! tr -s ' \n' ' ' <<<"$report" | grep -qF "$verdict"; then
     say "FAILED: auditwheel does not agree with the manylinux_2_17 tag of $whl:"
     say "$report"
     exit 1
@@ -72,9 +73,10 @@ for whl in "$wheel" "$cli_wheel"; do
     head -c 4 "$f" | grep -q 'ELF' || continue
     found=$((found + 1))
     newest=$(objdump -T "$f" | grep -oE 'GLIBC_[0-9]+(\.[0-9]+)*' | sed 's/GLIBC_//' | sort -uV | tail -1)
-    if [ -z "$newest" ] || [ "$(printf '%s\n%s\n' "$newest" "$glibc_floor" | sort -V | tail -1)" != "$glibc_floor" ]; then
+    highest=$(printf '%s\n%s\n' "$newest" "$glibc_floor" | sort -V | tail -1)
+    if [ -z "$newest" ] || [ "$highest" != "$glibc_floor" ]; then
       say "FAILED: ${f#"$work"/unzipped/} in $whl needs GLIBC_${newest:-?}, newer than its tag's GLIBC_$glibc_floor:"
-      objdump -T "$f" | grep -E "GLIBC_${newest//./\\.}( |$)" >&2 || true
+      objdump -T "$f" | grep -E "GLIBC_${newest//./\\.}([^0-9.]|$)" >&2 || true
       exit 1
     fi
   done < <(find "$work/unzipped" -type f -print0)
@@ -178,7 +180,8 @@ else
   quiet nice -n 10 cargo doc --no-deps -q -p chopperscape-core -p chopperscape-vector -p chopperscape-actionlog
   rm -rf docs/site/_build/html
   quiet "$DPY" -m sphinx -W --keep-going -q -b html docs/site docs/site/_build/html
-  [ -f docs/site/_build/html/rustdoc/chopperscape/index.html ] || { say "FAILED: the rustdoc is not in the site"; exit 1; }
+  [ -f docs/site/_build/html/rustdoc/chopperscape/index.html ] \
+    || { say "FAILED: the rustdoc is not in the site"; exit 1; }
   checks=$((checks + 1))
 fi
 

@@ -10,8 +10,9 @@ body is the docstring, parsed by MyST. Use it from a MyST page:
     :members: reset, step, render
     ```
 
-A module gives its docstring as text. `:members:` with no value documents every public member defined on the class itself that has a docstring; a
-comma-separated list documents those. A Markdown heading in a docstring (`## Rewards`) becomes a rubric.
+A module gives its docstring as text. `:members:` with no value documents every public member defined on the
+class itself that has a docstring; a comma-separated list documents those. A Markdown heading in a docstring
+(`## Rewards`) becomes a rubric.
 """
 
 from __future__ import annotations
@@ -83,8 +84,6 @@ def _body(obj) -> list[str]:
         m = HEADING.match(line) if fence is None else None
         if m:
             lines += ["", "```{rubric} " + m.group(2).strip(), "```", ""]
-        elif fence is None and stripped.startswith(">>>"):
-            lines.append(line)
         else:
             lines.append(line)
     return _doctest_blocks(lines)
@@ -147,7 +146,7 @@ class AutodocMd(SphinxDirective):
                     if kind == "property":
                         lines += ["", f"{inner}{{py:property}} {mname}", ""]
                     else:
-                        opt = [":staticmethod:"] if kind == "staticmethod" else [":classmethod:"] if kind == "classmethod" else []
+                        opt = [f":{kind}:"] if kind in ("staticmethod", "classmethod") else []
                         lines += ["", f"{inner}{{py:method}} {mname}{_signature(member, kind == 'method')}", *opt, ""]
                     lines += _body(member) + [inner]
             lines.append(colons)
@@ -158,7 +157,8 @@ class AutodocMd(SphinxDirective):
             lines += [f"{colons}{{py:data}} {name}", f":module: {module}", f":value: {obj!r}", ""]
             lines += [colons]
         node = nodes.container()
-        self.state.nested_parse(StringList(lines, source=f"<docstring of {self.arguments[0]}>"), self.content_offset, node)
+        source = StringList(lines, source=f"<docstring of {self.arguments[0]}>")
+        self.state.nested_parse(source, self.content_offset, node)
         return node.children
 
 
