@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# Builds the Python distributions into dist/ (gitignored):
-#   chopperscape-VERSION-cp39-abi3-manylinux_2_17_x86_64.manylinux2014_x86_64.whl  the package (one abi3 wheel for
-#                                                        CPython >= 3.9), linked against glibc 2.17 by zig
-#   chopperscape-VERSION.tar.gz                          its sdist (builds with any Rust toolchain)
-#   chopperscape_cli-VERSION-py3-none-manylinux_2_17_x86_64.manylinux2014_x86_64.whl  the `chopperscape` command
-#                                                        (crates/cli as a maturin `bin` wheel; `chopperscape[cli]`)
+# Builds the Python distributions into dist/ (gitignored), for x86_64 and aarch64 Linux:
+#   chopperscape-VERSION-cp39-abi3-manylinux2014_ARCH.manylinux_2_17_ARCH.whl   the package: one abi3 wheel for
+#                                                     every CPython >= 3.9, linked against glibc 2.17 by zig
+#   chopperscape-VERSION.tar.gz                       its sdist (builds anywhere with a Rust toolchain)
+#   chopperscape_cli-VERSION-py3-none-manylinux2014_ARCH.manylinux_2_17_ARCH.whl   the `chopperscape` command
+#                                                     (crates/cli as a maturin `bin` wheel; `chopperscape[cli]`)
 # The build tools (maturin, ziglang, both from PyPI) live in .venv-dist. No Docker: `maturin build --zig` links
-# with zig's glibc 2.17 stubs. Idempotent (cargo rebuilds only what changed); quiet on success; prints the files.
-# aarch64 is not built: rustup cannot fetch the aarch64-unknown-linux-gnu standard library here (only the package
-# registries are reachable), see python/README.md, "Wheels".
+# with zig's glibc 2.17 stubs, for either architecture from this x86_64 machine. aarch64 needs Rust's standard
+# library for aarch64-unknown-linux-gnu, which this script adds with rustup; where it cannot, it says so and builds
+# x86_64 only. CHOPPERSCAPE_DIST_ARCHS="x86_64" (or "aarch64") limits the architectures.
+# Idempotent (cargo rebuilds only what changed); quiet on success but for the list of files.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 cd "$ROOT"
@@ -27,11 +28,23 @@ version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -1)
 # Only this version's files are kept, so `twine check dist/*` and the install tests see one of each.
 find dist -maxdepth 1 -type f \( -name '*.whl' -o -name '*.tar.gz' \) ! -name "*-$version[-.]*" -delete
 
+archs=()
+for arch in ${CHOPPERSCAPE_DIST_ARCHS:-x86_64 aarch64}; do
+  target=$arch-unknown-linux-gnu
+  if ! rustup target list --installed 2>/dev/null | grep -qx "$target" && ! quiet rustup target add "$target"; then
+    say "skipped: the $arch wheels (rustup could not add the $target standard library)"
+    continue
+  fi
+  archs+=("$arch")
+done
+
 export PATH="$ROOT/$VENV/bin:$PATH"
 # build DIR ARGS...: maturin run in DIR (where its pyproject.toml is), writing into dist/.
 build() { local dir=$1; shift; (cd "$dir" && quiet nice -n 10 maturin "$@" --out "$ROOT/dist"); }
-wheel=(build --release --zig --compatibility manylinux2014 --target x86_64-unknown-linux-gnu)
-build python "${wheel[@]}"
 build python sdist
-build python/cli "${wheel[@]}"
-ls dist/*"$version"*
+for arch in "${archs[@]}"; do
+  wheel=(build --release --zig --compatibility manylinux2014 --target "$arch-unknown-linux-gnu")
+  build python "${wheel[@]}"
+  build python/cli "${wheel[@]}"
+done
+ls dist/*"$version"[-.]*

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The distributions and the documentation site, as a user gets them:
-#   1. scripts/build-dist.sh: the manylinux2014 abi3 wheel, the sdist and the chopperscape-cli wheel, in dist/;
+#   1. scripts/build-dist.sh: the manylinux2014 abi3 wheels and chopperscape-cli wheels (x86_64, aarch64), the
+#      sdist, in dist/;
 #   2. `twine check` on every file;
 #   3. `auditwheel show` agrees with each wheel's manylinux_2_17 tag, and no ELF file in a wheel needs a glibc
-#      symbol newer than GLIBC_2.17 (fails as soon as one creeps in);
+#      symbol newer than GLIBC_2.17 (fails as soon as one creeps in), for both architectures;
 #   4. both wheels installed into a fresh venv with no Rust toolchain on PATH: scripts/dist/smoke_test.py (make,
 #      step, check_env, the vector env, pilots, the `chopperscape` command) under pytest, run outside the repository,
 #      with python3 and with CPython 3.9 and 3.13 where installed (the abi3 wheel's oldest and newest claimed);
@@ -23,7 +24,7 @@ if ! command -v python3 >/dev/null 2>&1; then
 fi
 python3 -m venv --help >/dev/null 2>&1 || apt_install python3-venv \
   || { say "skipped: the distribution tests (python3 -m venv does not work)"; exit 0; }
-command -v objdump >/dev/null 2>&1 || apt_install binutils || true
+command -v readelf >/dev/null 2>&1 || apt_install binutils || true
 
 PIP=(-m pip install --disable-pip-version-check -q)
 work=$(mktemp -d)
@@ -40,6 +41,7 @@ if ! build_out=$(bash scripts/build-dist.sh 2>&1); then
   say "$build_out"
   exit 1
 fi
+grep '^skipped:' <<<"$build_out" >&2 || true
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -1)
 tag=manylinux2014_x86_64.manylinux_2_17_x86_64
 wheel=dist/chopperscape-$version-cp39-abi3-$tag.whl
@@ -48,20 +50,24 @@ sdist=dist/chopperscape-$version.tar.gz
 for f in "$wheel" "$cli_wheel" "$sdist"; do
   [ -f "$f" ] || { say "FAILED: scripts/build-dist.sh did not write $f; it wrote:"; ls dist >&2; exit 1; }
 done
+wheels=(dist/*-"$version"-*.whl)
 
 # 2. Metadata, as PyPI would check it.
 .venv-dist/bin/python -c 'import twine, auditwheel' 2>/dev/null \
   || quiet .venv-dist/bin/python "${PIP[@]}" "twine>=6,<8" "auditwheel>=6,<7"
-quiet .venv-dist/bin/twine check --strict dist/*"$version"[-.]*
+quiet .venv-dist/bin/twine check --strict "${wheels[@]}" "$sdist"
 checks=$((checks + 1))
 
-# 3. The platform tag: auditwheel's verdict, and the newest glibc symbol version any ELF file in a wheel needs.
+# 3. The platform tag of every wheel (x86_64 and aarch64): auditwheel's verdict, and the newest glibc symbol
+# version any ELF file in it needs.
 glibc_floor=2.17
-for whl in "$wheel" "$cli_wheel"; do
+for whl in "${wheels[@]}"; do
+  arch=$(sed -nE 's/.*manylinux_2_17_([a-z0-9_]+)\.whl$/\1/p' <<<"$whl")
+  [ -n "$arch" ] || { say "FAILED: $whl is not tagged manylinux_2_17"; exit 1; }
   report=$(.venv-dist/bin/auditwheel show "$whl" 2>&1) || { say "$report"; exit 1; }
-  verdict='consistent with the following platform tag: "manylinux_2_17_x86_64"'
+  verdict="consistent with the following platform tag: \"manylinux_2_17_$arch\""
   if ! tr -s ' \n' ' ' <<<"$report" | grep -qF "$verdict"; then
-    say "FAILED: auditwheel does not agree with the manylinux_2_17 tag of $whl:"
+    say "FAILED: auditwheel does not agree with the manylinux_2_17_$arch tag of $whl:"
     say "$report"
     exit 1
   fi
@@ -72,17 +78,21 @@ for whl in "$wheel" "$cli_wheel"; do
   while IFS= read -r -d '' f; do
     head -c 4 "$f" | grep -q 'ELF' || continue
     found=$((found + 1))
-    newest=$(objdump -T "$f" | grep -oE 'GLIBC_[0-9]+(\.[0-9]+)*' | sed 's/GLIBC_//' | sort -uV | tail -1)
+    # readelf reads the version needs of an ELF file of any architecture (objdump only the host's).
+    newest=$(readelf -W -V "$f" | grep -oE 'GLIBC_[0-9]+(\.[0-9]+)*' | sed 's/GLIBC_//' | sort -uV | tail -1)
     highest=$(printf '%s\n%s\n' "$newest" "$glibc_floor" | sort -V | tail -1)
     if [ -z "$newest" ] || [ "$highest" != "$glibc_floor" ]; then
       say "FAILED: ${f#"$work"/unzipped/} in $whl needs GLIBC_${newest:-?}, newer than its tag's GLIBC_$glibc_floor:"
-      objdump -T "$f" | grep -E "GLIBC_${newest//./\\.}([^0-9.]|$)" >&2 || true
+      readelf -W --dyn-syms "$f" | grep -E "@GLIBC_${newest//./\\.}([^0-9.]|$)" >&2 || true
       exit 1
     fi
   done < <(find "$work/unzipped" -type f -print0)
   [ "$found" -gt 0 ] || { say "FAILED: no ELF file in $whl"; exit 1; }
   checks=$((checks + 1))
 done
+if ls dist/*-"$version"-*aarch64.whl >/dev/null 2>&1 && [ "$(uname -m)" != aarch64 ]; then
+  say "skipped: running the aarch64 wheels (this machine is $(uname -m); their tags and glibc are checked above)"
+fi
 
 # 4. The wheels in a fresh venv, no cargo or rustc on PATH, run from outside the repository: with python3, and with
 # the oldest and newest CPython the wheel claims (3.9, 3.13) where they are installed (pyenv's too).
