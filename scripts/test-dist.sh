@@ -111,10 +111,13 @@ smoke() {  # smoke PYTHON: the smoke test in a fresh venv of that interpreter
   local py=$1 venv log clean_path tool
   venv="$work/wheel-venv-$(basename "$py")"
   quiet "$py" -m venv "$venv"
-  if ! quiet "$venv/bin/python" "${PIP[@]}" "$wheel" "$cli_wheel" "pytest>=7"; then
-    say "skipped: the wheel smoke test with $py (the wheels' dependencies could not be installed from PyPI)"
+  # The package's dependencies from PyPI, then the package as a user names it, `chopperscape[cli]`, from dist/
+  # alone: the `cli` extra must resolve to this version's chopperscape-cli wheel.
+  if ! quiet "$venv/bin/python" "${PIP[@]}" "gymnasium>=1.1,<2" "numpy>=1.21,<3" "pytest>=7"; then
+    say "skipped: the wheel smoke test with $py (gymnasium, numpy, pytest could not be installed from PyPI)"
     return 0
   fi
+  quiet "$venv/bin/python" "${PIP[@]}" --no-index --find-links dist "chopperscape[cli]==$version"
   clean_path="$venv/bin:/usr/local/bin:/usr/bin:/bin"
   for tool in cargo rustc; do
     if PATH=$clean_path command -v "$tool" >/dev/null 2>&1; then

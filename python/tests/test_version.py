@@ -60,3 +60,13 @@ def test_the_latest_release_in_the_changelog_is_this_version():
     # Every heading has its link at the bottom, as keep-a-changelog does.
     for name in headings:
         assert re.search(rf"^\[{re.escape(name)}\]: ", text, flags=re.M), f"no link for [{name}]"
+
+
+def test_the_packages_ship_the_repository_license():
+    # maturin takes a package's license file from beside its pyproject.toml, so the repository's LICENSE is copied.
+    license_text = (ROOT / "LICENSE").read_bytes()
+    for copy in ("python/LICENSE", "python/cli/LICENSE"):
+        assert (ROOT / copy).read_bytes() == license_text, f"{copy} differs from LICENSE"
+    for pyproject in ("python/pyproject.toml", "python/cli/pyproject.toml"):
+        project = toml(ROOT / pyproject)["project"]
+        assert project["license"] == toml(ROOT / "Cargo.toml")["workspace"]["package"]["license"], pyproject
