@@ -52,14 +52,14 @@ def test_the_installed_package_has_the_workspace_version():
 
 def test_the_latest_release_in_the_changelog_is_this_version():
     text = (ROOT / "CHANGELOG.md").read_text(encoding="utf-8")
-    releases = re.findall(r"^## \[(\d+\.\d+\.\d+)\] - (\d{4}-\d{2}-\d{2})$", text, flags=re.M)
+    releases = re.findall(r"^## \[(\d+\.\d+\.\d+)\] - (\d{4}-\d{2}-\d{2})$", text, flags=re.MULTILINE)
     assert releases, "CHANGELOG.md has no release heading '## [X.Y.Z] - YYYY-MM-DD'"
     assert releases[0][0] == workspace_version()
-    headings = re.findall(r"^## \[([^\]]+)\]", text, flags=re.M)
+    headings = re.findall(r"^## \[([^\]]+)\]", text, flags=re.MULTILINE)
     assert headings[0] == "Unreleased" and headings[1] == releases[0][0]
     # Every heading has its link at the bottom, as keep-a-changelog does.
     for name in headings:
-        assert re.search(rf"^\[{re.escape(name)}\]: ", text, flags=re.M), f"no link for [{name}]"
+        assert re.search(rf"^\[{re.escape(name)}\]: ", text, flags=re.MULTILINE), f"no link for [{name}]"
 
 
 def test_the_packages_ship_the_repository_license():

@@ -26,13 +26,13 @@ def test_no_rust_toolchain_and_the_installed_package():
 def test_make_and_step_every_obs_type():
     for obs_type in ("rgb", "rgb_float", "grayscale", "features"):
         env = gym.make("ChopperScape-v0", obs_type=obs_type, obs_size=(84, 84))
-        obs, info = env.reset(seed=0)
+        obs, _ = env.reset(seed=0)
         assert env.observation_space.contains(obs)
         for _ in range(50):
-            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
             assert env.observation_space.contains(obs) and reward in (1.0, -10.0)
             if terminated or truncated:
-                obs, info = env.reset()
+                env.reset()
         env.close()
 
 
@@ -56,7 +56,7 @@ def test_vector_env_equals_single_envs():
     for i, env in enumerate(singles):
         assert np.array_equal(env.reset(seed=10 + i)[0], obs[i])
     actions = np.array([0, 1, 3, 4])
-    obs, rewards, terminated, truncated, _ = envs.step(actions)
+    obs, rewards, *_ = envs.step(actions)
     for i, env in enumerate(singles):
         o, r, *_ = env.step(int(actions[i]))
         assert np.array_equal(o, obs[i]) and r == rewards[i]
@@ -77,8 +77,12 @@ def test_pilots():
 def test_the_cli_wheel_matches_the_package():
     exe = shutil.which("chopperscape")
     assert exe and exe.startswith(sys.prefix), exe
-    out = subprocess.run([exe, "demo", "--policy", "heuristic", "--episodes", "2", "--seed", "0", "--json"],
-                         check=True, capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [exe, "demo", "--policy", "heuristic", "--episodes", "2", "--seed", "0", "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     lines = [json.loads(line) for line in out.splitlines()]
     expected = list(pilots.episodes("heuristic", 2, seed=0))
     assert [e["return"] for e in lines] == [e["return"] for e in expected]

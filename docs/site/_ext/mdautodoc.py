@@ -21,6 +21,7 @@ import enum
 import importlib
 import inspect
 import re
+from typing import ClassVar
 
 from docutils import nodes
 from docutils.statemachine import StringList
@@ -79,7 +80,7 @@ def _body(obj) -> list[str]:
     lines, fence = [], None
     for line in doc.splitlines():
         stripped = line.strip()
-        if stripped.startswith("```") or stripped.startswith("~~~"):
+        if stripped.startswith(("```", "~~~")):
             fence = None if fence else stripped[:3]
         m = HEADING.match(line) if fence is None else None
         if m:
@@ -119,14 +120,13 @@ def _own_members(cls, names: list[str] | None):
             func = member.__func__
             if func.__doc__:
                 yield "staticmethod" if isinstance(member, staticmethod) else "classmethod", name, func
-        elif inspect.isfunction(member) or inspect.isbuiltin(member) or inspect.ismethoddescriptor(member):
-            if member.__doc__:
-                yield "method", name, member
+        elif inspect.isroutine(member) and member.__doc__:
+            yield "method", name, member
 
 
 class AutodocMd(SphinxDirective):
     required_arguments = 1
-    option_spec = {"members": lambda arg: [] if arg is None else [a.strip() for a in arg.split(",") if a.strip()]}
+    option_spec: ClassVar[dict] = {"members": lambda arg: [] if arg is None else [a.strip() for a in arg.split(",") if a.strip()]}
 
     def run(self):
         module, obj = _import(self.arguments[0])
