@@ -29,13 +29,18 @@ version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -1)
 find dist -maxdepth 1 -type f \( -name '*.whl' -o -name '*.tar.gz' \) ! -name "*-$version[-.]*" -delete
 
 archs=()
-for arch in ${CHOPPERSCAPE_DIST_ARCHS:-x86_64 aarch64}; do
+wanted=" ${CHOPPERSCAPE_DIST_ARCHS:-x86_64 aarch64} "
+for arch in x86_64 aarch64; do
   target=$arch-unknown-linux-gnu
-  if ! rustup target list --installed 2>/dev/null | grep -qx "$target" && ! quiet rustup target add "$target"; then
+  if [[ "$wanted" != *" $arch "* ]]; then
+    :  # not asked for
+  elif ! rustup target list --installed 2>/dev/null | grep -qx "$target" && ! quiet rustup target add "$target"; then
     say "skipped: the $arch wheels (rustup could not add the $target standard library)"
+  else
+    archs+=("$arch")
     continue
   fi
-  archs+=("$arch")
+  rm -f dist/*"_$arch.whl"  # no wheel of an earlier build is left to pass for this one
 done
 
 export PATH="$ROOT/$VENV/bin:$PATH"
