@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test of the project: formatting, lints and the Rust tests of every crate; `play` in a real window
-# under Xvfb; the Python package under pytest; the browser page in headless Chromium.
+# under Xvfb; the Python package under pytest; the browser page in headless Chromium; the wheels, the sdist and
+# the documentation site as a user gets them (scripts/test-dist.sh).
 # It first installs what the tests need (ffmpeg, Xvfb, xdotool, Chromium, the wasm target, wasm-bindgen-cli,
 # a Python venv with the package and its test dependencies, npm packages); where it cannot (not root), it says
 # what it skipped and why. Idempotent; quiet on success; never prompts (CI runs it with CI=true).
@@ -14,7 +15,7 @@ apt_install ffmpeg || true
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 failed=()
-for part in rust cli python web; do
+for part in rust cli python web dist; do
   bash "scripts/test-$part.sh" 2>&1 | tee -a "$log" || failed+=("$part")
 done
 
