@@ -26,6 +26,7 @@ where ``causes`` gives the share of episodes that ended each way.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -144,6 +145,11 @@ def load_policy(model: str | Path, stochastic: bool, seed: int, env_options: dic
             f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.train, an SB3 .zip, "
             f"or a pilot name: {', '.join(NAMES)})"
         )
+    needs = ("torch", "stable_baselines3") if path.suffix == ".zip" else ("torch",)
+    missing = [m for m in needs if importlib.util.find_spec(m) is None]
+    if missing:
+        raise ValueError(f"reading model file {str(path)!r} needs {' and '.join(missing)}, which is not installed: "
+                         "pip install 'chopperscape[train]'")
     if path.suffix == ".zip":
         return load_sb3(path, stochastic, env_options, trust_pickle)
     return load_recipe(path, stochastic, seed, env_options)
