@@ -57,9 +57,15 @@ def test_the_latest_release_in_the_changelog_is_this_version():
     assert releases[0][0] == workspace_version()
     headings = re.findall(r"^## \[([^\]]+)\]", text, flags=re.MULTILINE)
     assert headings[0] == "Unreleased" and headings[1] == releases[0][0]
-    # Every heading has its link at the bottom, as keep-a-changelog does.
-    for name in headings:
-        assert re.search(rf"^\[{re.escape(name)}\]: ", text, flags=re.MULTILINE), f"no link for [{name}]"
+
+
+def test_no_placeholder_address_is_shipped():
+    # The project has no public home yet: no metadata, README or changelog may point at a made-up one (add the real
+    # addresses, and the changelog's compare links, when there is one).
+    for name in ("Cargo.toml", "CHANGELOG.md", "python/pyproject.toml", "python/cli/pyproject.toml",
+                 "python/cli/README.md", "python/README.md", "README.md"):
+        text = (ROOT / name).read_text(encoding="utf-8")
+        assert "example.invalid" not in text and "example.com" not in text, f"{name} has a placeholder address"
 
 
 def test_the_packages_ship_the_repository_license():
