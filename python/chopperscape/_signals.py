@@ -16,7 +16,7 @@ from __future__ import annotations
 import contextlib
 import signal
 import threading
-from typing import Iterator
+from typing import Any, Iterator
 
 #: The signals a guard defers.
 SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -28,7 +28,7 @@ class Interrupted(BaseException):
     def __init__(self, signum: int, message: str = ""):
         self.signum = signum
         self.exit_code = 128 + signum
-        name = {signal.SIGINT: "interrupted"}.get(signum) or (
+        name = {int(signal.SIGINT): "interrupted"}.get(signum) or (
             "terminated" if signum == getattr(signal, "SIGTERM", None) else "hung up"
         )
         super().__init__(f"{name}{'; ' + message if message else ''}")
@@ -39,7 +39,7 @@ class Guard:
 
     def __init__(self) -> None:
         self.pending: int | None = None
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, Any] = {}
         self._depth = 0
 
     def _note(self, signum: int, frame: object) -> None:

@@ -54,7 +54,7 @@ def _bounds_row(core) -> tuple[np.ndarray, np.ndarray, tuple[int, ...], np.dtype
     return np.tile(low, reps).reshape(shape), np.tile(high, reps).reshape(shape), shape, np.dtype(core.obs_dtype)
 
 
-def observation_box(core, keep_dim: bool = False) -> spaces.Box:
+def observation_box(core, keep_dim: bool = False) -> BroadcastBox:
     """The observation space of one environment: a `Box` with the core's shape, dtype and bounds. With
     `keep_dim`, a 2-D (grayscale, unstacked) observation gets a trailing channel axis: `(H, W, 1)`."""
     low, high, shape, dtype = _bounds_row(core)

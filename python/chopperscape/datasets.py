@@ -33,6 +33,7 @@ finds them, in Minari's HDF5 layout through Minari's own storage classes, with i
 from __future__ import annotations
 
 import errno
+import functools
 import os
 import pathlib
 import re
@@ -45,7 +46,7 @@ from typing import Any, Callable, Iterable, Iterator
 try:
     import resource
 except ImportError:  # pragma: no cover - not on Windows
-    resource = None
+    resource = None  # type: ignore[assignment]
 
 import gymnasium as gym
 import numpy as np
@@ -262,7 +263,11 @@ def _write(
         for ep, (seed, next_action) in enumerate(episodes):
             obs, _ = env.reset(seed=seed)
             seeds.append(seed)
-            o, a, r, te, tr = [obs], [], [], [], []
+            o: list[Any] = [obs]
+            a: list[int] = []
+            r: list[float] = []
+            te: list[bool] = []
+            tr: list[bool] = []
             first, steps, ret = True, 0, 0.0
 
             def flush() -> None:
@@ -459,8 +464,7 @@ def from_action_logs(
 
     def plays() -> Iterator[tuple[int, Callable[[], int | None]]]:
         for log in read:
-            it = iter(log["actions"])
-            yield log["seed"], (lambda it=it: next(it, None))
+            yield log["seed"], functools.partial(next, iter(log["actions"]), None)
 
     meta = _metadata(
         dataset_id,

@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 import importlib.util
-from typing import Any, SupportsFloat
+from typing import TYPE_CHECKING, Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
 from gymnasium.wrappers import OrderEnforcing, TimeLimit
+
+if TYPE_CHECKING:
+    from ._human import HumanWindow
 
 from . import _core
 from ._checks import time_limit
@@ -160,7 +163,7 @@ class ChopperScapeEnv(gym.Env):
         self._keep_dim = channel_axis(keep_dim, self._core)
         self.observation_space = observation_box(self._core, self._keep_dim)
         self._stream_started = False
-        self._window = None
+        self._window: HumanWindow | None = None
         #: Set by the registered entry point: `gymnasium.make` wraps this env in a `TimeLimit`.
         self._made_by_gymnasium = False
 
@@ -290,7 +293,7 @@ def restore_state(env: gym.Env, state: bytes) -> None:
     layer = env
     while isinstance(layer, gym.Wrapper):
         if isinstance(layer, TimeLimit):
-            layer._elapsed_steps = steps
+            layer._elapsed_steps = steps  # type: ignore[assignment]  # Gymnasium annotates it as None
         layer = layer.env
 
 

@@ -162,8 +162,8 @@ def heuristic() -> Pilot:
 
 def fixed(action: int | str) -> Pilot:
     """Always the same action: an index 0..=4 or a name (`"right"`, `"left"`, `"down"`, `"up"`, `"noop"`)."""
-    name = _FIXED.get(action) if isinstance(action, (int, np.integer)) and not isinstance(action, bool) else action
-    if name not in _FIXED.values():
+    name = _FIXED.get(int(action)) if isinstance(action, (int, np.integer)) and not isinstance(action, bool) else action
+    if not isinstance(name, str) or name not in _FIXED.values():
         raise ValueError(f"invalid fixed action {action!r}: allowed 0..=4 or {', '.join(_FIXED.values())}")
     return Pilot(name)
 
@@ -194,7 +194,7 @@ def _play(pilot: Pilot, env: gym.Env, n: int, seed: int) -> Iterator[dict[str, A
                 action = pilot.act(env)
                 _, reward, terminated, truncated, info = env.step(action)
                 actions.append(action)
-                total += int(reward)
+                total += int(float(reward))
                 if terminated or truncated:
                     cause = info.get("cause", "truncated") if terminated else "truncated"
                     break

@@ -75,8 +75,8 @@ def env_creator(config: Mapping[str, Any]) -> gym.Env | gym.vector.VectorEnv:
     An unknown option or a bad value raises `ValueError` naming it. Lists (what JSON and YAML configs hold) are
     taken as tuples: `"obs_size": [84, 84]` is `(84, 84)`.
     """
-    options = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(config).items()}
-    num_envs = options.pop("num_envs", None)
+    options: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(config).items()}
+    num_envs: Any = options.pop("num_envs", None)
     for key in ("autoreset_mode", "copy"):
         if key in options:
             raise ValueError(
@@ -137,9 +137,10 @@ class RunnerSeededVectorEnv(gym.vector.VectorWrapper):
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seed = [int(seed) * SEED_STRIDE + i for i in range(self.num_envs)]
-            self.reset_seeds = list(seed)
-        return self.env.reset(seed=seed, options=options)
+            seeds = [int(seed) * SEED_STRIDE + i for i in range(self.num_envs)]
+            self.reset_seeds = seeds
+            return self.env.reset(seed=seeds, options=options)  # type: ignore[arg-type]  # per-env seeds
+        return self.env.reset(seed=seed, options=options)  # type: ignore[arg-type]
 
 
 class RunnerSeededEnv(gym.Wrapper):

@@ -162,7 +162,7 @@ class ChopperScapeVecEnv(VecEnv):
     def get_images(self) -> Sequence[np.ndarray | None]:
         if self.render_mode != "rgb_array":
             return [None] * self.num_envs
-        return list(self.venv.render())
+        return list(self.venv.render() or ())
 
     # The attribute API of VecEnv. There is one native env, not N Python objects: attributes are the batch's.
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
@@ -260,10 +260,10 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
             continue
         if key == "observation_space":
             stored = item.get("_shape")
-            if isinstance(stored, list) and tuple(stored) != tuple(obs_space.shape):
+            if isinstance(stored, list) and tuple(stored) != tuple(obs_space.shape or ()):
                 raise ValueError(
                     f"{path} takes observations of shape {tuple(stored)}, but these env options give "
-                    f"{tuple(obs_space.shape)}: give the options it was trained with (--option ...)"
+                    f"{tuple(obs_space.shape or ())}: give the options it was trained with (--option ...)"
                 )
             custom[key] = obs_space
         elif key == "action_space":

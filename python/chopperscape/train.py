@@ -35,7 +35,7 @@ import time
 from collections import deque
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from gymnasium.wrappers.utils import RunningMeanStd as _GymRunningMeanStd
@@ -248,14 +248,37 @@ class ObsNormalizer:
         return np.clip(out, -10.0, 10.0).astype(np.float32)
 
 
-def _layer(layer: nn.Module, std: float = math.sqrt(2)) -> nn.Module:
+#: A layer that `_layer` initialises.
+_L = TypeVar("_L", nn.Linear, nn.Conv2d)
+
+
+def _layer(layer: _L, std: float = math.sqrt(2)) -> _L:
     """Orthogonal weights and zero biases, as in CleanRL's PPO."""
     nn.init.orthogonal_(layer.weight, std)
-    nn.init.constant_(layer.bias, 0.0)
+    if layer.bias is not None:
+        nn.init.constant_(layer.bias, 0.0)
     return layer
 
 
-class Agent(nn.Module):
+class ActorCritic(nn.Module):
+    """What PPO needs of a network: `actor(obs)` gives the action logits and `critic(obs)` the value."""
+
+    actor: nn.Module
+    critic: nn.Module
+
+    def value(self, x: torch.Tensor) -> torch.Tensor:
+        return self.critic(x).squeeze(-1)
+
+    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
+        """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
+        logits = self.actor(x)
+        dist = torch.distributions.Categorical(logits=logits)
+        if action is None:
+            action = dist.sample()
+        return action, dist.log_prob(action), dist.entropy(), self.value(x)
+
+
+class Agent(ActorCritic):
     """Separate actor and critic MLPs (tanh), orthogonal init as in CleanRL's PPO."""
 
     def __init__(self, obs_dim: int, num_actions: int, hidden: int):
@@ -268,16 +291,6 @@ class Agent(nn.Module):
             _layer(nn.Linear(obs_dim, hidden)), nn.Tanh(), _layer(nn.Linear(hidden, hidden)), nn.Tanh(),
             _layer(nn.Linear(hidden, num_actions), 0.01),
         )
-
-    def value(self, x: torch.Tensor) -> torch.Tensor:
-        return self.critic(x).squeeze(-1)
-
-    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
-        logits = self.actor(x)
-        dist = torch.distributions.Categorical(logits=logits)
-        if action is None:
-            action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), self.value(x)
 
 
 class Frames(nn.Module):
@@ -300,7 +313,7 @@ CNNS = {
 }
 
 
-class CnnAgent(nn.Module):
+class CnnAgent(ActorCritic):
     """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy).
     `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
@@ -329,9 +342,6 @@ class CnnAgent(nn.Module):
         self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
         self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
 
-    value = Agent.value
-    act = Agent.act
-
 
 def network_of(recipe: dict[str, Any] | Recipe) -> str:
     """The network a recipe trains: its `network`, with "auto" resolved by its obs_type."""
@@ -342,7 +352,9 @@ def network_of(recipe: dict[str, Any] | Recipe) -> str:
     return net
 
 
-def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128) -> nn.Module:
+def build_agent(
+    network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128
+) -> ActorCritic:
     """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's)."""
     if network == "mlp":
         if len(obs_shape) != 1:
@@ -355,7 +367,7 @@ def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, 
     return CnnAgent(tuple(obs_shape), num_actions, network)
 
 
-def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> nn.Module:
+def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCritic:
     """Rebuilds the agent a checkpoint (see :func:`save`) holds, with its weights, in eval mode. `ValueError`
     naming the first field that is missing or of the wrong kind, or a layout version other than this package's."""
 
@@ -391,7 +403,7 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> nn.Modu
         )
     network = network_of(recipe)
     try:
-        agent = build_agent(network, tuple(shape), 5, hidden)
+        agent = build_agent(network, tuple(shape), 5, int(hidden or 0))
     except ValueError as e:
         raise bad("recipe.network", str(e)) from None
     for part in ("actor", "critic"):
@@ -418,7 +430,7 @@ def _plain(value: Any) -> Any:
 
 
 def save(
-    path: Path, agent: nn.Module, obs_norm: ObsNormalizer, recipe: Recipe, obs_shape: tuple[int, ...], env_steps: int
+    path: Path, agent: ActorCritic, obs_norm: ObsNormalizer, recipe: Recipe, obs_shape: tuple[int, ...], env_steps: int
 ) -> None:
     """Writes the policy atomically (temp file + rename): a crash or a Ctrl-C never leaves a half-written model,
     nor the temporary file. The payload is tensors and plain data only (`torch.load(weights_only=True)`).
@@ -470,7 +482,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     envs = VectorEnv(
         recipe.num_envs, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options
     )
-    obs_shape = tuple(envs.single_observation_space.shape)
+    obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
     agent = build_agent(network, obs_shape, 5, recipe.hidden).to(device)

@@ -72,11 +72,12 @@ class VectorEnv(gym.vector.VectorEnv):
         if num_threads is None:
             num_threads = DEFAULT_THREADS
         num_threads = positive_int("num_threads", num_threads)
+        mode: AutoresetMode | None
         try:
-            autoreset_mode = AutoresetMode(autoreset_mode)
+            mode = AutoresetMode(autoreset_mode)
         except ValueError:
-            autoreset_mode = None
-        if autoreset_mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
+            mode = None
+        if mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP):
             raise ValueError(
                 "invalid value for option `autoreset_mode`: allowed AutoresetMode.NEXT_STEP or AutoresetMode.SAME_STEP"
             )
@@ -88,7 +89,7 @@ class VectorEnv(gym.vector.VectorEnv):
             int(num_envs),
             int(num_threads),
             {**options, "max_episode_steps": None},
-            autoreset_mode == AutoresetMode.SAME_STEP,
+            mode == AutoresetMode.SAME_STEP,
             bool(copy),
             None if max_episode_steps is None else int(max_episode_steps),
         )
@@ -98,8 +99,8 @@ class VectorEnv(gym.vector.VectorEnv):
         self.num_threads = self._core.num_threads
         self.copy = bool(copy)
         self.render_mode = render_mode
-        self.autoreset_mode = autoreset_mode
-        self.metadata = {**type(self).metadata, "autoreset_mode": autoreset_mode}
+        self.autoreset_mode = mode
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.max_episode_steps = max_episode_steps
         self._keep_dim = channel_axis(keep_dim, self._core)
         self.single_observation_space = observation_box(self._core, self._keep_dim)
