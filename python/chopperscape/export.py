@@ -36,6 +36,7 @@ import hashlib
 import json
 import os
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -173,10 +174,14 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
     }
     tmp = out.with_name(f".{out.name}.{os.getpid()}.part")
     try:
-        torch.onnx.export(
-            module, (example,), str(tmp), input_names=["obs"], output_names=["logits"],
-            dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}}, opset_version=OPSET, dynamo=False,
-        )
+        # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
+        # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            torch.onnx.export(
+                module, (example,), str(tmp), input_names=["obs"], output_names=["logits"],
+                dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}}, opset_version=OPSET, dynamo=False,
+            )
         graph = onnx.load(str(tmp))
         del graph.metadata_props[:]
         for key, value in metadata.items():
