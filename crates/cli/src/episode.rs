@@ -157,10 +157,9 @@ pub fn play_policy(
     mut frame: impl FnMut(&ChopperScape) -> Result<()>,
 ) -> Result<EpisodeResult> {
     let (mut runner, mut acting) = match pilot {
-        Pilot::BuiltIn(name) => (
-            Runner::new(config)?,
-            Acting::BuiltIn(policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?),
-        ),
+        Pilot::BuiltIn(name) => {
+            (Runner::new(config)?, Acting::BuiltIn(policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?))
+        }
         Pilot::Model(model) => (Runner::observing(config)?, Acting::Model(&mut **model)),
     };
     runner.reset(seed);

@@ -32,7 +32,9 @@ pub enum PolicyError {
         problem: String,
     },
     /// The policy observes something else than the env gives.
-    #[error("the policy takes {model} observations, but the env gives {env}: play it with the options it was trained with")]
+    #[error(
+        "the policy takes {model} observations, but the env gives {env}: play it with the options it was trained with"
+    )]
     Mismatch {
         /// What the model takes (type and shape).
         model: String,

@@ -225,7 +225,11 @@ impl Policy {
             let logits = out.first().ok_or_else(|| PolicyError::Run("the graph gave no output".into()))?;
             let values = logits.try_as_plain_ram().and_then(|v| v.as_slice::<f32>()).map_err(run_err)?;
             <[f32; N_ACTIONS]>::try_from(values).map_err(|_| {
-                PolicyError::Run(format!("the graph gives {} values of shape {:?}, not 5 logits", values.len(), logits.shape()))
+                PolicyError::Run(format!(
+                    "the graph gives {} values of shape {:?}, not 5 logits",
+                    values.len(),
+                    logits.shape()
+                ))
             })
         })
     }

@@ -62,7 +62,10 @@ fn a_features_policy_plays_an_episode_to_its_end() {
 fn a_pixel_policy_takes_the_envs_frames() {
     let mut policy = Policy::load(PIXELS).unwrap();
     let config = policy.config().unwrap();
-    assert_eq!((config.obs_type, config.obs_size, config.frame_stack, config.frame_skip), (ObsType::Grayscale, (84, 84), 4, 4));
+    assert_eq!(
+        (config.obs_type, config.obs_size, config.frame_stack, config.frame_skip),
+        (ObsType::Grayscale, (84, 84), 4, 4)
+    );
     policy.check(&config).unwrap();
     let mut env = ChopperScape::new(config).unwrap();
     let (obs, _) = env.reset(Some(1));

@@ -11,9 +11,9 @@ pub mod web;
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::builder::PossibleValuesParser;
 use chopperscape::Config;
 use chopperscape_policy::Policy;
+use clap::builder::PossibleValuesParser;
 
 use crate::episode::{EpisodeResult, Pilot};
 use crate::options::GameOptions;
@@ -105,7 +105,10 @@ pub fn pilot_and_config(arg: &PolicyArg, options: &GameOptions) -> Result<(Loade
         let (name, values) = difference.split_once(' ').unwrap_or((&difference, ""));
         let (was, now) = values.split_once(" != ").unwrap_or((values, ""));
         if name != "max_episode_steps" && (pixels || name != "hud_style") {
-            crate::note!("warning: {} was trained with {name} {was}; it plays with {name} {now}, as given", path.display());
+            crate::note!(
+                "warning: {} was trained with {name} {was}; it plays with {name} {now}, as given",
+                path.display()
+            );
         }
     }
     if let Err(e) = policy.check(&played) {

@@ -109,7 +109,11 @@ pub fn run(args: RecordArgs) -> Result<ExitCode> {
     let episode = episode?;
     super::replay::render(&config, &episode, o)?;
     if let Some(path) = &o.save_actions {
-        output::write_atomic(path, actionlog::to_json(&config, &args.policy.name(), &episode.played()).as_bytes(), o.force)?;
+        output::write_atomic(
+            path,
+            actionlog::to_json(&config, &args.policy.name(), &episode.played()).as_bytes(),
+            o.force,
+        )?;
     }
     crate::say!("{}\n{}", table_header(), table_row(0, &episode))?;
     for (what, path) in [("video", &o.out), ("frames", &o.frames), ("actions", &o.save_actions)] {
