@@ -160,7 +160,7 @@ pub fn play_policy(
         Pilot::BuiltIn(name) => {
             (Runner::new(config)?, Acting::BuiltIn(policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?))
         }
-        Pilot::Model(model) => (Runner::observing(config)?, Acting::Model(&mut **model)),
+        Pilot::Model(model) => (Runner::observing(config)?, Acting::Model(model)),
     };
     runner.reset(seed);
     frame(runner.env())?;
