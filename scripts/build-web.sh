@@ -23,5 +23,8 @@ mkdir -p "$out"
 quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
   "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
 cp web/index.html web/main.js web/style.css "$out/"
+# The trained agent the page offers ("Watch: trained agent"), the export of models/ppo-features.pt.
+mkdir -p "$out/models"
+cp models/ppo-features.onnx "$out/models/"
 rm -rf web/dist
 mv "$out" web/dist
