@@ -111,10 +111,6 @@ def _policy_module(agent, norm, model_shape: tuple[int, ...], env_shape: tuple[i
     return Policy().eval()
 
 
-def _dtype(obs_type: str):
-    return np.uint8 if obs_type in ("rgb", "grayscale") else np.float32
-
-
 def record_observations(payload: dict[str, Any], agent, norm, options: dict[str, Any], n: int = CHECK_OBSERVATIONS,
                         seed: int = 0) -> np.ndarray:
     """`n` observations met by playing the env greedily with the policy (8 envs, seeds `seed + i`, autoreset)."""
@@ -156,7 +152,9 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
     payload, agent, norm, options, env_shape = load(model)
     obs_type = payload["recipe"]["obs_type"]
     module = _policy_module(agent, norm, payload_shape(payload), env_shape)
-    example = torch.zeros((2, *env_shape), dtype=torch.from_numpy(np.zeros(0, _dtype(obs_type))).dtype)
+    # The env's element type: uint8 frames (rgb, grayscale), float32 otherwise (features, rgb_float).
+    dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
+    example = torch.zeros((2, *env_shape), dtype=dtype)
     pixels = obs_type != "features"
     from . import FEATURES_VERSION, PIXELS_VERSION
 
