@@ -80,14 +80,7 @@ impl Session {
         let mut rgba = vec![0; FRAME_HEIGHT * FRAME_WIDTH * 4];
         // Alpha never changes: the frame is opaque.
         rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
-        Ok(Session {
-            env,
-            pilot,
-            agent,
-            obs,
-            rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3],
-            rgba,
-        })
+        Ok(Session { env, pilot, agent, obs, rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3], rgba })
     }
 
     /// Starts an episode from `seed` and draws its first frame.
