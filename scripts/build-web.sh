@@ -13,7 +13,10 @@ if [ "$(wasm-bindgen --version 2>/dev/null || true)" != "wasm-bindgen $WASM_BIND
   quiet cargo install wasm-bindgen-cli --version "$WASM_BINDGEN_VERSION"
 fi
 
-quiet cargo build -p chopperscape-web --release --target wasm32-unknown-unknown
+# Optimised for size, without debug info: tract (the trained agent's inference) makes most of the module, and this
+# takes it from 15.7 MB to 12.0 MB (2.7 MB gzipped); the page needs 30 steps a second of a far faster core.
+CARGO_PROFILE_RELEASE_OPT_LEVEL=s CARGO_PROFILE_RELEASE_DEBUG=0 \
+  quiet cargo build -p chopperscape-web --release --target wasm32-unknown-unknown
 target_dir="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
 
 # Build beside dist, then swap, so a failed build never leaves a half-written page.
@@ -23,5 +26,8 @@ mkdir -p "$out"
 quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
   "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
 cp web/index.html web/main.js web/style.css "$out/"
+# The trained agent the page offers ("Watch: trained agent"), the export of models/ppo-features.pt.
+mkdir -p "$out/models"
+cp models/ppo-features.onnx "$out/models/"
 rm -rf web/dist
 mv "$out" web/dist

@@ -15,6 +15,8 @@ const DIRECTIONS = {
   ArrowUp: 3, KeyW: 3,
 };
 const CAUSES = { bird: "Hit by a bird", fuel: "Out of fuel" };
+// The trained agent: `models/ppo-features.pt` exported by `python -m chopperscape.export`, served beside the page.
+const AGENT_URL = "models/ppo-features.onnx";
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("screen");
@@ -27,6 +29,8 @@ let seed = 0n; // of the game on screen
 let over = false;
 let paused = false;
 let pilot = false;
+let agent = false; // the trained policy flies (its game was made with Game.with_policy)
+let agentBytes = null; // the policy file, fetched once
 let lastCause = null;
 let held = []; // codes of held direction keys, the last pressed last: it wins
 let acc = 0;
@@ -67,7 +71,9 @@ function newGame() {
   let nextSeed;
   try {
     nextSeed = readSeed();
-    next = new Game(["lives", "alien_prob"], [$("lives").value, $("alien_prob").value]);
+    const names = ["lives", "alien_prob"];
+    const values = [$("lives").value, $("alien_prob").value];
+    next = agent ? Game.with_policy(agentBytes, names, values) : new Game(names, values);
   } catch (e) {
     showError(e.message);
     return e.message;
@@ -87,6 +93,7 @@ function newGame() {
 }
 
 function action() {
+  if (agent) return game.agent_action();
   if (pilot) return game.pilot_action();
   return held.length ? DIRECTIONS[held[held.length - 1]] : NOOP;
 }
@@ -116,14 +123,61 @@ function setPaused(on) {
 }
 
 function setPilot(on) {
+  if (on && agent) setAgentOff();
   pilot = on;
   $("pilot").setAttribute("aria-pressed", String(on));
   if (on && over) newGame();
   updateStatus();
 }
 
+// Fetches the trained policy (once). Returns the error message, or null.
+async function loadAgent() {
+  if (agentBytes) return null;
+  try {
+    const response = await fetch(AGENT_URL);
+    if (!response.ok) throw new Error(`${AGENT_URL}: ${response.status} ${response.statusText || "error"}`);
+    agentBytes = new Uint8Array(await response.arrayBuffer());
+    return null;
+  } catch (e) {
+    return `${e.message}`;
+  }
+}
+
+function setAgentOff() {
+  agent = false;
+  $("agent").setAttribute("aria-pressed", "false");
+}
+
+// Lets the trained agent fly a new game with the form's seed and options, or hands the game back. Returns the
+// error message (also shown on the page), or null; on an error the game on screen goes on unchanged.
+async function setAgent(on) {
+  if (!on) {
+    setAgentOff();
+    newGame();
+    return null;
+  }
+  const failed = await loadAgent();
+  if (failed) {
+    const message = `The trained agent could not be loaded: ${failed}`;
+    showError(message);
+    return message;
+  }
+  if (pilot) setPilot(false);
+  agent = true;
+  const error = newGame();
+  if (error) {
+    setAgentOff();
+    agentBytes = null; // a bad file is fetched again next time
+    const message = `The trained agent could not be loaded: ${error}`;
+    showError(message);
+    return message;
+  }
+  $("agent").setAttribute("aria-pressed", "true");
+  return null;
+}
+
 function updateStatus() {
-  const who = pilot ? "The pilot is flying" : "You are flying";
+  const who = agent ? "The trained agent is flying" : pilot ? "The pilot is flying" : "You are flying";
   const state = over ? "episode over" : paused ? "paused" : `step ${game.steps()}`;
   $("status").textContent = `${who} · ${state}`;
 }
@@ -178,6 +232,7 @@ $("controls").addEventListener("submit", (event) => {
 });
 $("pause").addEventListener("click", () => setPaused(!paused));
 $("pilot").addEventListener("click", () => setPilot(!pilot));
+$("agent").addEventListener("click", () => setAgent(!agent));
 
 function base64(bytes) {
   let text = "";
@@ -201,6 +256,7 @@ window.chopperscape = {
     cause: lastCause,
     paused,
     pilot,
+    agent,
   }),
   // Fills the form and starts a game; returns the error message, or null.
   newGame(seedValue, options = {}) {
@@ -211,12 +267,22 @@ window.chopperscape = {
   },
   setPaused,
   setPilot,
+  setAgent,
+  // The action the flyer on screen (the trained agent, the pilot, or no key: Do Nothing) picks now.
+  action: () => action(),
   // Steps these actions now (paused or not), stopping if the episode ends; then draws.
   stepN(actions) {
     for (const a of actions) {
       if (over) break;
       stepOnce(a);
     }
+    draw();
+    updateStatus();
+    return this.state();
+  },
+  // Steps with the flyer on screen until the episode ends (or `limit` steps); then draws.
+  playToEnd(limit = 20000) {
+    for (let i = 0; i < limit && !over; i++) stepOnce(action());
     draw();
     updateStatus();
     return this.state();

@@ -20,7 +20,14 @@ to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``), w
     {"model": ..., "episodes": 100, "seed": 1000000, "mean_return": ..., "std_return": ..., "min_return": ...,
      "max_return": ..., "mean_steps": ..., "causes": {"bird": 0.62, "fuel": 0.08, "truncated": 0.30}, ...}
 
-where ``causes`` gives the share of episodes that ended each way.
+where ``causes`` gives the share of episodes that ended each way (``--per-episode`` adds each episode's seed,
+return, steps and cause: the episodes ``chopperscape demo --policy MODEL.onnx --json`` plays for the same
+``--seed``, from the export of the same model).
+
+``--video out.gif`` (or ``out.mp4``, through the ``ffmpeg`` program) also writes the first ``--video-episodes K``
+episodes (default 1) one after the other, at 30 frames a second, as the command line's ``record`` draws them
+(600 × 800, the text HUD). The episodes are played first and their actions replayed to draw them, so the video
+shows exactly the episodes of the result line.
 """
 
 from __future__ import annotations
@@ -43,11 +50,11 @@ CHUNK = 128
 
 def play_episodes(
     act: Callable[[np.ndarray, VectorEnv], np.ndarray], episodes: int, seed: int, env_options: dict[str, Any],
-    max_episode_steps: int | None = 10_000,
+    max_episode_steps: int | None = 10_000, keep_actions: int = 0,
 ) -> list[dict[str, Any]]:
     """Plays `episodes` episodes on seeds `seed, seed + 1, …` with `act(obs_batch, envs) -> actions` (`envs`, the
     `VectorEnv` being played, is for pilots that read the game); one dict each (`seed`, `return`, `steps`,
-    `cause`)."""
+    `cause`, and for the first `keep_actions` episodes `actions`, the list of actions taken)."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"invalid value {episodes!r} for `episodes`: allowed an integer >= 1")
     results: list[dict[str, Any]] = []
@@ -61,8 +68,13 @@ def play_episodes(
             ret, steps = np.zeros(n, np.int64), np.zeros(n, np.int64)
             live = np.ones(n, bool)
             causes: list[str | None] = [None] * n
+            kept: list[list[int]] = [[] for _ in range(max(0, min(n, keep_actions - first)))]
             while live.any():
-                obs, reward, term, trunc, info = envs.step(np.asarray(act(obs, envs), dtype=np.int64))
+                actions = np.asarray(act(obs, envs), dtype=np.int64)
+                for i, taken in enumerate(kept):
+                    if live[i]:
+                        taken.append(int(actions[i]))
+                obs, reward, term, trunc, info = envs.step(actions)
                 ret += np.where(live, reward, 0).astype(np.int64)
                 steps += live
                 ended = live & (term | trunc)
@@ -75,6 +87,8 @@ def play_episodes(
             {"seed": seed + first + i, "return": int(ret[i]), "steps": int(steps[i]), "cause": causes[i]}
             for i in range(n)
         ]
+        for i, taken in enumerate(kept):
+            results[first + i]["actions"] = taken
     return results
 
 
@@ -116,7 +130,7 @@ REFUSED_OPTIONS = {
     "num_threads": "evaluation steps its own batch on one thread (results do not depend on threads)",
     "autoreset_mode": "evaluation plays each episode once to its end; it needs no autoreset mode",
     "copy": "evaluation reads each step's arrays itself; it takes no `copy`",
-    "render_mode": "evaluation draws nothing; record a video with `chopperscape record` instead",
+    "render_mode": "evaluation draws nothing itself; give --video FILE (.gif or .mp4) for a video",
 }
 
 
@@ -263,6 +277,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="env option, as the command line's flags take it (obs_size=84x84, hud=false, "
                         "max_episode_steps=none)")
     p.add_argument("--per-episode", action="store_true", help="also list every episode")
+    p.add_argument("--video", metavar="FILE", help="also write the first episodes as a video: .gif (Pillow) or .mp4 "
+                                                   "(needs the ffmpeg program); an existing file is replaced")
+    p.add_argument("--video-episodes", type=int, default=1, metavar="K",
+                   help="episodes in the --video, from the first (default 1)")
     p.add_argument("--trust-pickle", action="store_true",
                    help="allow pickled parts of an SB3 .zip and a vecnormalize.pkl beside it: pickles run code when "
                         "loaded, so only for files whose author you trust")
@@ -271,14 +289,28 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
     if not 0 <= a.seed < 2**63:
         p.error(f"--seed {a.seed}: allowed 0 <= seed < 2**63")
+    if not 1 <= a.video_episodes <= a.episodes:
+        p.error(f"--video-episodes {a.video_episodes}: allowed 1..=--episodes ({a.episodes})")
     options = env_options(p, a.option, refused=REFUSED_OPTIONS)
     limit = options.pop("max_episode_steps", 10_000)
     try:
+        if a.video is not None:
+            from . import video
+
+            video.check_destination(Path(a.video))
         act, play_options = load_policy(a.model, a.stochastic, a.seed, options, trust_pickle=a.trust_pickle)
-        results = play_episodes(act, a.episodes, a.seed, play_options, max_episode_steps=limit)
+        keep = a.video_episodes if a.video is not None else 0
+        results = play_episodes(act, a.episodes, a.seed, play_options, max_episode_steps=limit, keep_actions=keep)
+        if a.video is not None:
+            video.write(Path(a.video), play_options, results[:keep])
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:
+        print(f"error: cannot write {a.video}: {err}", file=sys.stderr)
+        return 1
+    for r in results:
+        r.pop("actions", None)
     out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
     if not isinstance(act, _PilotPlayer):
         out["greedy"] = not a.stochastic
@@ -287,6 +319,8 @@ def main(argv: list[str] | None = None) -> int:
     out.update(summary(results))
     if a.per_episode:
         out["per_episode"] = results
+    if a.video is not None:
+        out["video"] = a.video
     return print_line(json.dumps(out))
 
 

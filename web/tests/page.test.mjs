@@ -1,7 +1,9 @@
 // Browser tests of the ChopperScape page in headless Chromium.
 import assert from "node:assert/strict";
+import { execFileSync } from "node:child_process";
+import { join } from "node:path";
 import { after, before, test } from "node:test";
-import { firstDifference, HEIGHT, launchChromium, nativeFrame, openPage, serveDist, WIDTH } from "./harness.mjs";
+import { firstDifference, HEIGHT, launchChromium, nativeFrame, openPage, ROOT, serveDist, WIDTH } from "./harness.mjs";
 
 let server;
 let browser;
@@ -161,5 +163,44 @@ test("P pauses, the end of an episode says why, and R starts a new game with the
     assert.equal(fresh.seed, "42");
     assert.equal(await page.inputValue("#seed"), "42");
     assert.equal(await page.isVisible("#message"), false);
+  });
+});
+
+test("watch: trained agent plays the command line's episode for the same seed", async () => {
+  execFileSync("cargo", ["build", "--quiet", "-p", "chopperscape-cli"], { cwd: ROOT, stdio: "inherit" });
+  const bin = join(process.env.CARGO_TARGET_DIR ?? join(ROOT, "target"), "debug", "chopperscape");
+  const model = join(ROOT, "models", "ppo-features.onnx");
+  // Aliens make the episode end early, at a step that depends on every action the policy picked.
+  const args = ["demo", "--policy", model, "--seed", "3", "--aliens", "0.05", "--json"];
+  const native = JSON.parse(execFileSync(bin, args, { stdio: ["ignore", "pipe", "ignore"] }).toString());
+  await withPage(async (page, errors) => {
+    await page.evaluate(() => window.chopperscape.setPaused(true));
+    assert.equal(await page.evaluate(() => window.chopperscape.newGame(3, { alien_prob: 0.05 })), null);
+    assert.equal(await page.evaluate(() => window.chopperscape.setAgent(true)), null);
+    assert.equal(await page.getAttribute("#agent", "aria-pressed"), "true");
+    const s = await page.evaluate(() => window.chopperscape.playToEnd());
+    assert.equal(s.agent, true);
+    assert.deepEqual([s.steps, s.score, s.cause], [native.steps, native.return, native.cause]);
+    assert.match(await page.textContent("#status"), /trained agent is flying/);
+    assert.deepEqual(errors, []);
+  });
+});
+
+test("a missing or bad model file says so on the page", async () => {
+  await withPage(async (page) => {
+    await page.evaluate(() => window.chopperscape.setPaused(true));
+    const before = await state(page);
+    await page.route("**/models/ppo-features.onnx", (route) => route.fulfill({ status: 404, body: "" }));
+    let err = await page.evaluate(() => window.chopperscape.setAgent(true));
+    assert.match(err, /trained agent could not be loaded.*404/);
+    assert.equal(await page.isVisible("#error"), true);
+    assert.match(await page.textContent("#error"), /could not be loaded/);
+    await page.unroute("**/models/ppo-features.onnx");
+    await page.route("**/models/ppo-features.onnx", (route) => route.fulfill({ status: 200, body: "not a model" }));
+    err = await page.evaluate(() => window.chopperscape.setAgent(true));
+    assert.match(err, /not a ChopperScape policy/);
+    const after = await state(page);
+    assert.equal(after.agent, false);
+    assert.deepEqual({ ...after, agent: undefined }, { ...before, agent: undefined });
   });
 });

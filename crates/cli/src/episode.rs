@@ -1,10 +1,12 @@
-//! Playing one episode headless: with a built-in policy, or from a list of actions.
+//! Playing one episode headless: with a built-in pilot, a trained policy, or from a list of actions.
 //!
-//! The env observes the cheap `features` vector (nothing is drawn); a caller that records asks the env for the
-//! full frame through the `frame` callback, which runs after `reset` and after every step.
+//! The env observes the cheap `features` vector (nothing is drawn), or for a trained policy what the policy
+//! takes; a caller that records asks the env for the full frame through the `frame` callback, which runs after
+//! `reset` and after every step.
 
 use anyhow::{Context, Result, bail};
-use chopperscape::{ChopperScape, Config, ObsBufMut, ObsType, Status, policy};
+use chopperscape::{ChopperScape, Config, Env, ObsType, Observation, Status, policy};
+use chopperscape_policy::Policy;
 use serde::Serialize;
 
 /// What one episode came to.
@@ -41,10 +43,10 @@ impl EpisodeResult {
     }
 }
 
-/// One environment that observes features only, plus its observation buffer.
+/// One environment plus its observation buffer.
 pub struct Runner {
     env: ChopperScape,
-    obs: Vec<f32>,
+    obs: Observation,
     seed: u64,
     actions: Vec<u8>,
     start: (i32, i32),
@@ -53,15 +55,20 @@ pub struct Runner {
 impl Runner {
     /// An environment with `config`'s rules; its observation is switched to `features` (nothing is drawn).
     pub fn new(config: &Config) -> Result<Runner> {
-        let config = Config { obs_type: ObsType::Features, frame_stack: 1, ..config.clone() };
-        let env = ChopperScape::new(config).context("invalid game options")?;
-        let obs = vec![0.0; env.obs_len()];
+        Runner::observing(&Config { obs_type: ObsType::Features, frame_stack: 1, ..config.clone() })
+    }
+
+    /// An environment with `config`'s rules and observation.
+    pub fn observing(config: &Config) -> Result<Runner> {
+        let env = ChopperScape::new(config.clone()).context("invalid game options")?;
+        let space = env.observation_space();
+        let obs = Observation::zeros(space.shape.clone(), space.dtype);
         Ok(Runner { env, obs, seed: 0, actions: Vec::new(), start: (0, 0) })
     }
 
     /// Starts an episode with `seed`.
     pub fn reset(&mut self, seed: u64) {
-        self.env.reset_into(Some(seed), ObsBufMut::F32(&mut self.obs)).expect("the buffer has the env's own length");
+        self.env.reset_into(Some(seed), self.obs.as_buf_mut()).expect("the buffer has the env's own length");
         self.seed = seed;
         self.actions.clear();
         let c = self.env.world().chopper;
@@ -73,7 +80,7 @@ impl Runner {
     /// # Errors
     /// An invalid action, or a step after the episode ended.
     pub fn step(&mut self, action: u8) -> Result<()> {
-        self.env.step_into(i64::from(action), ObsBufMut::F32(&mut self.obs))?;
+        self.env.step_into(i64::from(action), self.obs.as_buf_mut())?;
         self.actions.push(action);
         Ok(())
     }
@@ -123,20 +130,38 @@ pub fn step_cap() -> u32 {
     std::env::var("CHOPPERSCAPE_STEP_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(STEP_CAP)
 }
 
-/// Plays one whole episode with the built-in policy `name`, whose own generator (for `random`) is seeded with
-/// `seed` too. `frame` sees the env after reset and after every step.
+/// Who flies: a built-in pilot by name, or a trained policy.
+pub enum Pilot<'a> {
+    /// A built-in pilot (`chopperscape::policy::NAMES`).
+    BuiltIn(&'a str),
+    /// A trained policy; the env observes what it takes (its options were checked by [`Policy::check`]).
+    Model(&'a mut Policy),
+}
+
+/// A pilot ready to act in one episode.
+enum Acting<'p> {
+    BuiltIn(Box<dyn policy::Policy + Send + Sync>),
+    Model(&'p mut Policy),
+}
+
+/// Plays one whole episode with `pilot`; a built-in one's own generator (for `random`) is seeded with `seed`
+/// too. `frame` sees the env after reset and after every step.
 ///
 /// # Errors
-/// An unknown policy, an error from `frame`, or an episode without a step limit that is still running after
-/// [`step_cap`] steps.
+/// An unknown pilot, a policy that fails, an error from `frame`, or an episode without a step limit that is
+/// still running after [`step_cap`] steps.
 pub fn play_policy(
     config: &Config,
-    name: &str,
+    pilot: &mut Pilot<'_>,
     seed: u64,
     mut frame: impl FnMut(&ChopperScape) -> Result<()>,
 ) -> Result<EpisodeResult> {
-    let mut pilot = policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?;
-    let mut runner = Runner::new(config)?;
+    let (mut runner, mut acting) = match pilot {
+        Pilot::BuiltIn(name) => {
+            (Runner::new(config)?, Acting::BuiltIn(policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?))
+        }
+        Pilot::Model(model) => (Runner::observing(config)?, Acting::Model(model)),
+    };
     runner.reset(seed);
     frame(runner.env())?;
     let cap = if config.max_episode_steps.is_none() { step_cap() } else { u32::MAX };
@@ -147,7 +172,10 @@ pub fn play_policy(
                  there (memory and time stay bounded); give --max-episode-steps N to truncate episodes at N steps"
             );
         }
-        let action = pilot.act(runner.env().world());
+        let action = match &mut acting {
+            Acting::BuiltIn(p) => p.act(runner.env().world()),
+            Acting::Model(model) => model.act(&runner.obs)?,
+        };
         runner.step(action as u8)?;
         frame(runner.env())?;
     }
@@ -184,7 +212,7 @@ mod tests {
     #[test]
     fn replaying_a_policy_episode_reproduces_it() {
         let config = Config::default();
-        let played = play_policy(&config, "random", 5, |_| Ok(())).unwrap();
+        let played = play_policy(&config, &mut Pilot::BuiltIn("random"), 5, |_| Ok(())).unwrap();
         assert!(played.cause.is_some());
         assert_eq!(played.actions.len(), played.steps as usize);
         let replayed = replay_actions(&config, 5, &played.actions, |_| Ok(())).unwrap();
@@ -194,7 +222,7 @@ mod tests {
     #[test]
     fn actions_past_the_end_are_refused() {
         let config = Config::default();
-        let mut actions = play_policy(&config, "noop", 1, |_| Ok(())).unwrap().actions;
+        let mut actions = play_policy(&config, &mut Pilot::BuiltIn("noop"), 1, |_| Ok(())).unwrap().actions;
         actions.push(4);
         let err = replay_actions(&config, 1, &actions, |_| Ok(())).unwrap_err().to_string();
         assert!(err.contains("episode ended"), "{err}");

@@ -78,10 +78,10 @@ fn main() -> ExitCode {
             return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
-    if !matches!(cli.command, Command::Web(_)) {
-        if let Err(e) = interrupt::install() {
-            note!("warning: Ctrl-C will not clean up unfinished files: {e}");
-        }
+    if !matches!(cli.command, Command::Web(_))
+        && let Err(e) = interrupt::install()
+    {
+        note!("warning: Ctrl-C will not clean up unfinished files: {e}");
     }
     let result = match cli.command {
         Command::Demo(a) => commands::demo::run(a),
@@ -95,10 +95,10 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            if let Some(out) = err.downcast_ref::<report::StdoutError>() {
-                if out.0.kind() == std::io::ErrorKind::BrokenPipe {
-                    return ExitCode::from(CLOSED_PIPE);
-                }
+            if let Some(out) = err.downcast_ref::<report::StdoutError>()
+                && out.0.kind() == std::io::ErrorKind::BrokenPipe
+            {
+                return ExitCode::from(CLOSED_PIPE);
             }
             note!("error: {err:#}");
             if err.downcast_ref::<UsageError>().is_some() { ExitCode::from(2) } else { ExitCode::FAILURE }

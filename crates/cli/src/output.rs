@@ -293,10 +293,11 @@ pub fn sweep_stale(folder: &Path) {
     let mut found: Vec<(PathBuf, String, bool)> = Vec::new();
     for entry in entries.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
-        if let Some(t) = parse_temp_name(&name) {
-            if t.pid != std::process::id() && !is_running(t.pid) {
-                found.push((entry.path(), t.dest.to_string(), t.aside));
-            }
+        if let Some(t) = parse_temp_name(&name)
+            && t.pid != std::process::id()
+            && !is_running(t.pid)
+        {
+            found.push((entry.path(), t.dest.to_string(), t.aside));
         }
     }
     // Unfinished outputs first, then the folders moved aside.

@@ -57,6 +57,28 @@ impl Game {
         Ok(Game { session })
     }
 
+    /// A game flown by a trained policy: `policy` holds the bytes of an exported `.onnx` (from
+    /// `python -m chopperscape.export`), played under the options it was trained with, then `names[i] = values[i]`.
+    /// Throws an `Error` saying what is wrong with the file or an option.
+    pub fn with_policy(policy: &[u8], names: Vec<String>, values: Vec<String>) -> Result<Game, JsError> {
+        if names.len() != values.len() {
+            return Err(JsError::new(&format!("{} option names but {} values", names.len(), values.len())));
+        }
+        let options = names.iter().map(String::as_str).zip(values.iter().map(String::as_str));
+        let session = Session::with_policy(policy, options).map_err(|e| JsError::new(&e))?;
+        Ok(Game { session })
+    }
+
+    /// The action the trained policy picks now (greedy). Throws without a policy.
+    pub fn agent_action(&mut self) -> Result<i32, JsError> {
+        Ok(self.session.agent_action().map_err(|e| JsError::new(&e))?.index() as i32)
+    }
+
+    /// Whether a trained policy flies this game.
+    pub fn has_agent(&self) -> bool {
+        self.session.has_agent()
+    }
+
     /// Starts an episode from `seed` and draws its first frame.
     pub fn reset(&mut self, seed: u64) {
         self.session.reset(seed);

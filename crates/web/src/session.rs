@@ -1,9 +1,10 @@
-//! What the page drives, in plain Rust: one environment, its frame buffers and the heuristic pilot.
+//! What the page drives, in plain Rust: one environment, its frame buffers, the heuristic pilot and, when the
+//! page loaded one, a trained policy (`chopperscape-policy`, the same code as `chopperscape demo --policy`).
 //!
 //! Nothing here touches JavaScript, so it is tested natively; `lib.rs` only maps it to `wasm-bindgen`.
 
 use chopperscape::policy::{self, Policy};
-use chopperscape::{Action, ChopperScape, Config, ObsBufMut, ObsType, Status, Transition, World, features};
+use chopperscape::{Action, ChopperScape, Config, Env, ObsType, Observation, Status, Transition, World};
 
 /// Height of the frame the page shows, in pixels.
 pub const FRAME_HEIGHT: usize = chopperscape::consts::HEIGHT as usize;
@@ -19,8 +20,10 @@ pub const PAGE_OPTIONS: &[&str] =
 pub struct Session {
     env: ChopperScape,
     pilot: Box<dyn Policy + Send>,
-    /// The features observation `step_into` writes: the cheapest observation, unused by the page.
-    features: Vec<f32>,
+    /// The trained policy, if the page loaded one.
+    agent: Option<chopperscape_policy::Policy>,
+    /// The observation `step_into` writes: features, the cheapest, which a trained policy reads.
+    obs: Observation,
     rgb: Vec<u8>,
     rgba: Vec<u8>,
 }
@@ -32,30 +35,57 @@ impl Session {
     /// An option the page does not offer, or a value out of range; the message names the option and what
     /// is allowed.
     pub fn new<'a>(options: impl IntoIterator<Item = (&'a str, &'a str)>) -> Result<Session, String> {
-        let mut config = Config { obs_type: ObsType::Features, ..Config::default() };
+        Session::build(Config { obs_type: ObsType::Features, ..Config::default() }, options, None)
+    }
+
+    /// A session flown by the trained policy in `policy` (the bytes of an exported `.onnx`), under the options
+    /// it was trained with, then these page options. The page observes features, so the policy must too.
+    ///
+    /// # Errors
+    /// A file that is not a policy, a policy that observes something else than features, or a bad option.
+    pub fn with_policy<'a>(
+        policy: &[u8],
+        options: impl IntoIterator<Item = (&'a str, &'a str)>,
+    ) -> Result<Session, String> {
+        let agent = chopperscape_policy::Policy::from_bytes(policy).map_err(|e| e.to_string())?;
+        let config = agent.config().map_err(|e| e.to_string())?;
+        if config.obs_type != ObsType::Features {
+            return Err(format!(
+                "the page plays policies that observe features; this one observes {} (watch it with `chopperscape \
+                 record --policy FILE.onnx`)",
+                config.obs_type.as_str()
+            ));
+        }
+        Session::build(config, options, Some(agent))
+    }
+
+    fn build<'a>(
+        mut config: Config,
+        options: impl IntoIterator<Item = (&'a str, &'a str)>,
+        agent: Option<chopperscape_policy::Policy>,
+    ) -> Result<Session, String> {
         for (name, value) in options {
             if !PAGE_OPTIONS.contains(&name) {
                 return Err(format!("unknown option `{name}`: allowed options are {}", PAGE_OPTIONS.join(", ")));
             }
             config.set(name, value).map_err(|e| e.to_string())?;
         }
+        if let Some(agent) = &agent {
+            agent.check(&config).map_err(|e| e.to_string())?;
+        }
         let env = ChopperScape::new(config).map_err(|e| e.to_string())?;
         let pilot = heuristic(env.config());
+        let space = env.observation_space();
+        let obs = Observation::zeros(space.shape.clone(), space.dtype);
         let mut rgba = vec![0; FRAME_HEIGHT * FRAME_WIDTH * 4];
         // Alpha never changes: the frame is opaque.
         rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
-        Ok(Session {
-            env,
-            pilot,
-            features: vec![0.0; features::FEATURES_LEN],
-            rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3],
-            rgba,
-        })
+        Ok(Session { env, pilot, agent, obs, rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3], rgba })
     }
 
     /// Starts an episode from `seed` and draws its first frame.
     pub fn reset(&mut self, seed: u64) {
-        self.env.reset_into(Some(seed), ObsBufMut::F32(&mut self.features)).expect("the features buffer fits");
+        self.env.reset_into(Some(seed), self.obs.as_buf_mut()).expect("the observation buffer fits");
         self.pilot = heuristic(self.env.config());
         self.draw();
     }
@@ -65,7 +95,7 @@ impl Session {
     /// # Errors
     /// An invalid action, a step before `reset` or after the episode ended; nothing changes then.
     pub fn step(&mut self, action: i64) -> Result<Transition, String> {
-        let t = self.env.step_into(action, ObsBufMut::F32(&mut self.features)).map_err(|e| e.to_string())?;
+        let t = self.env.step_into(action, self.obs.as_buf_mut()).map_err(|e| e.to_string())?;
         self.draw();
         Ok(t)
     }
@@ -73,6 +103,20 @@ impl Session {
     /// The action the heuristic pilot picks for the current state.
     pub fn pilot_action(&mut self) -> Action {
         self.pilot.act(self.env.world())
+    }
+
+    /// The action the trained policy picks for the current observation (greedy), if a policy flies.
+    ///
+    /// # Errors
+    /// No policy was loaded, or it failed.
+    pub fn agent_action(&mut self) -> Result<Action, String> {
+        let agent = self.agent.as_mut().ok_or("no trained policy was loaded")?;
+        agent.act(&self.obs).map_err(|e| e.to_string())
+    }
+
+    /// Whether a trained policy was loaded.
+    pub fn has_agent(&self) -> bool {
+        self.agent.is_some()
     }
 
     /// The current state.
@@ -183,6 +227,36 @@ mod tests {
         }
         assert!(s.is_over());
         assert!(s.step(4).unwrap_err().contains("reset"));
+    }
+
+    const POLICY: &[u8] = include_bytes!("../../../models/ppo-features.onnx");
+
+    #[test]
+    fn the_trained_agent_plays_the_command_lines_episode() {
+        // The episode of `chopperscape demo --policy models/ppo-features.onnx --seed 3 --aliens 0.05`.
+        let mut s = Session::with_policy(POLICY, [("alien_prob", "0.05")]).unwrap();
+        s.reset(3);
+        let config = Config { alien_prob: 0.05, ..Config::features() };
+        let mut policy = chopperscape_policy::Policy::from_bytes(POLICY).unwrap();
+        let mut env = ChopperScape::new(config).unwrap();
+        let (mut obs, _) = env.reset(Some(3));
+        while !s.is_over() {
+            let a = s.agent_action().unwrap();
+            assert_eq!(a, policy.act(&obs).unwrap());
+            s.step(a as i64).unwrap();
+            obs = env.step(a as i64).unwrap().observation;
+        }
+        assert_eq!(s.world(), env.world());
+        assert!(s.world().steps > 10);
+    }
+
+    #[test]
+    fn a_bad_policy_file_is_refused_with_a_message() {
+        let err = Session::with_policy(&POLICY[..200], []).err().unwrap();
+        assert!(err.contains("not a ChopperScape policy"), "{err}");
+        let err = Session::with_policy(POLICY, [("lives", "0")]).err().unwrap();
+        assert!(err.contains("lives"), "{err}");
+        assert!(session(&[]).agent_action().unwrap_err().contains("no trained policy"));
     }
 
     #[test]

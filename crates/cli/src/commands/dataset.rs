@@ -16,7 +16,7 @@ use std::process::{Command, ExitCode, ExitStatus, Stdio};
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::policy_parser;
+use super::pilot_name_parser;
 use crate::interrupt::{self, Cleanup};
 use crate::options::GameOptions;
 use crate::usage_bail;
@@ -40,7 +40,7 @@ pub struct DatasetArgs {
     #[arg(long, value_name = "NAME")]
     pub out: String,
     /// The pilot: random, heuristic, or a fixed action (right, left, down, up, noop) [default: heuristic]
-    #[arg(long, value_parser = policy_parser(), conflicts_with = "from_logs")]
+    #[arg(long, value_parser = pilot_name_parser(), conflicts_with = "from_logs")]
     pub policy: Option<String>,
     /// Number of episodes, at least 1 [default: 1]
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "from_logs")]

@@ -8,13 +8,113 @@ pub mod record;
 pub mod replay;
 pub mod web;
 
+use std::path::PathBuf;
+
+use anyhow::Result;
+use chopperscape::Config;
+use chopperscape_policy::Policy;
 use clap::builder::PossibleValuesParser;
 
-use crate::episode::EpisodeResult;
+use crate::episode::{EpisodeResult, Pilot};
+use crate::options::GameOptions;
+use crate::usage_bail;
 
-/// A clap parser for the built-in policy names.
-pub fn policy_parser() -> PossibleValuesParser {
+/// A clap parser for the built-in pilot names only (`dataset`).
+pub fn pilot_name_parser() -> PossibleValuesParser {
     PossibleValuesParser::new(chopperscape::policy::NAMES)
+}
+
+/// What `--policy` names: a built-in pilot, or a trained policy exported by `python -m chopperscape.export`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PolicyArg {
+    /// A built-in pilot (`chopperscape::policy::NAMES`).
+    BuiltIn(String),
+    /// An ONNX policy file.
+    Model(PathBuf),
+}
+
+/// A clap parser for `--policy`: a built-in pilot's name is always the pilot (a file of that name is `./NAME`);
+/// anything ending in `.onnx` or holding a `/` is a policy file.
+pub fn policy_parser(s: &str) -> Result<PolicyArg, String> {
+    let names = chopperscape::policy::NAMES;
+    if names.contains(&s) {
+        Ok(PolicyArg::BuiltIn(s.to_string()))
+    } else if s.ends_with(".onnx") || s.contains(std::path::MAIN_SEPARATOR) || s.contains('/') {
+        Ok(PolicyArg::Model(PathBuf::from(s)))
+    } else {
+        Err(format!(
+            "{s:?} is not a pilot: give one of {}, or an exported policy file (NAME.onnx, from python -m \
+             chopperscape.export)",
+            names.join(", ")
+        ))
+    }
+}
+
+impl PolicyArg {
+    /// The name an action log records.
+    pub fn name(&self) -> String {
+        match self {
+            PolicyArg::BuiltIn(name) => name.clone(),
+            PolicyArg::Model(path) => path.display().to_string(),
+        }
+    }
+}
+
+/// A pilot ready to fly: a built-in one, or a loaded policy.
+pub enum LoadedPilot {
+    /// A built-in pilot by name.
+    BuiltIn(String),
+    /// A trained policy.
+    Model(Box<Policy>),
+}
+
+impl LoadedPilot {
+    /// The pilot as `episode::play_policy` takes it.
+    pub fn pilot(&mut self) -> Pilot<'_> {
+        match self {
+            LoadedPilot::BuiltIn(name) => Pilot::BuiltIn(name),
+            LoadedPilot::Model(policy) => Pilot::Model(policy),
+        }
+    }
+}
+
+/// The pilot `--policy` names and the options to play it under. A built-in pilot plays the v0 rules with the
+/// flags given; a policy plays the options it was trained with (its metadata), each flag that changes one of
+/// its rules said on stderr, and is refused (exit 2, naming both) if the env would not give the observation it
+/// takes.
+///
+/// # Errors
+/// A policy file that cannot be loaded, or options that do not fit it: [`crate::UsageError`].
+pub fn pilot_and_config(arg: &PolicyArg, options: &GameOptions) -> Result<(LoadedPilot, Config)> {
+    let path = match arg {
+        PolicyArg::BuiltIn(name) => return Ok((LoadedPilot::BuiltIn(name.clone()), options.apply(Config::default())?)),
+        PolicyArg::Model(path) => path,
+    };
+    let policy = match Policy::load(path) {
+        Ok(policy) => policy,
+        Err(e) => usage_bail!("--policy {}: {e}", path.display()),
+    };
+    let trained = match policy.config() {
+        Ok(config) => config,
+        Err(e) => usage_bail!("--policy {}: {e}", path.display()),
+    };
+    let played = options.apply(trained.clone())?;
+    let pixels = trained.obs_type.is_pixels();
+    for difference in trained.differences(&played) {
+        // The step limit is how long to watch, not what the policy learned; the HUD's style is drawn only.
+        let (name, values) = difference.split_once(' ').unwrap_or((&difference, ""));
+        let (was, now) = values.split_once(" != ").unwrap_or((values, ""));
+        if name != "max_episode_steps" && (pixels || name != "hud_style") {
+            crate::note!(
+                "warning: {} was trained with {name} {was}; it plays with {name} {now}, as given",
+                path.display()
+            );
+        }
+    }
+    if let Err(e) = policy.check(&played) {
+        usage_bail!("--policy {}: {e}", path.display());
+    }
+    Ok((LoadedPilot::Model(Box::new(policy)), played))
 }
 
 /// A clap parser for a seed, whose message gives the range.

@@ -1,0 +1,214 @@
+"""Trained policies everywhere (issue 19): the ONNX export (`python -m chopperscape.export`), the command line
+playing it (`chopperscape demo --policy MODEL.onnx`) the same episodes as `python -m chopperscape.evaluate MODEL.pt`,
+and videos from `evaluate --video`."""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+import pathlib
+import pickle
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from test_pilots import ROOT, cli
+
+needs_torch = pytest.mark.skipif(
+    importlib.util.find_spec("torch") is None or importlib.util.find_spec("onnx") is None,
+    reason="torch and onnx are not installed (scripts/test-python.sh installs them)",
+)
+MODEL = ROOT / "models" / "ppo-features.pt"
+EXPORT = ROOT / "models" / "ppo-features.onnx"
+
+
+def export(*args) -> int:
+    from chopperscape import export as ex
+
+    return ex.main([str(a) for a in args])
+
+
+def evaluate(*args) -> int:
+    from chopperscape import evaluate as ev
+
+    return ev.main([str(a) for a in args])
+
+
+def make_pixel_model(path: pathlib.Path) -> None:
+    """The pixel recipe's CNN, untrained (torch seed 0): what `crates/policy/tests/data/pixels-untrained.onnx` is
+    the export of."""
+    import torch
+
+    from chopperscape import train
+
+    torch.manual_seed(0)
+    shape = (84, 84, 4)
+    recipe = train.Recipe(**train.PRESETS["pixels"])
+    train.save(path, train.build_agent("small", shape, 5), train.ObsNormalizer(shape, False), recipe, shape, 0)
+
+
+def metadata(path: pathlib.Path) -> dict[str, str]:
+    import onnx
+
+    return {p.key: p.value for p in onnx.load(str(path)).metadata_props}
+
+
+@needs_torch
+def test_the_committed_export_is_of_the_committed_model():
+    meta = metadata(EXPORT)
+    assert meta["format"] == "chopperscape-policy/1"
+    assert meta["source_sha256"] == hashlib.sha256(MODEL.read_bytes()).hexdigest()
+    assert (meta["obs_type"], json.loads(meta["obs_shape"]), json.loads(meta["env_options"])) == ("features", [46], {})
+    assert (meta["features_version"], meta["pixels_version"]) == ("2", "2")
+
+
+@needs_torch
+def test_export_maps_raw_observations_to_torchs_logits(tmp_path, capsys):
+    out = tmp_path / "policy.onnx"
+    assert export(MODEL, "--out", out) == 0
+    result = json.loads(capsys.readouterr().out)
+    if importlib.util.find_spec("onnxruntime") is None:
+        assert result["checked"] is False and "onnxruntime" in result["why"]
+        pytest.skip("onnxruntime is not installed: the logits check is skipped")
+    assert result["checked"] and result["observations"] == 1000 and result["max_abs_diff"] <= 1e-5
+    assert metadata(out) == metadata(EXPORT)
+
+
+@needs_torch
+def test_a_pixel_model_exports_with_uint8_frames(tmp_path, capsys):
+    import onnx
+
+    make_pixel_model(tmp_path / "model.pt")
+    out = tmp_path / "pixels.onnx"
+    assert export(tmp_path / "model.pt", "--out", out) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["obs_shape"] == [84, 84, 4]
+    assert result.get("checked") is not True or result["max_abs_diff"] <= 1e-5
+    meta = metadata(out)
+    assert meta["obs_type"] == "grayscale"
+    assert json.loads(meta["env_options"]) == {"frame_skip": 4, "frame_stack": 4, "obs_size": [84, 84]}
+    graph_input = onnx.load(str(out)).graph.input[0].type.tensor_type
+    assert graph_input.elem_type == onnx.TensorProto.UINT8
+    assert [d.dim_value or d.dim_param for d in graph_input.shape.dim] == ["batch", 84, 84, 4]
+
+
+@needs_torch
+def test_bad_models_and_outputs_are_one_line_errors(tmp_path, capsys):
+    marker = tmp_path / "ran"
+
+    class Payload:
+        def __reduce__(self):
+            return (pathlib.Path.touch, (marker,))
+
+    hostile = tmp_path / "hostile.pt"
+    hostile.write_bytes(pickle.dumps({"format": "chopperscape-ppo/1", "x": Payload()}))
+    text = tmp_path / "notes.pt"
+    text.write_text("not a model")
+    cases = [
+        (tmp_path / "missing.pt", "does not exist"),
+        (text, "is not a chopperscape.train model"),
+        (hostile, "is not a chopperscape.train model"),
+    ]
+    for model, message in cases:
+        assert export(model, "--out", tmp_path / "x.onnx") == 2
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert not marker.exists()
+    assert not (tmp_path / "x.onnx").exists()
+    (tmp_path / "taken.onnx").write_text("")
+    assert export(MODEL, "--out", tmp_path / "taken.onnx") == 2
+    assert "pass --force" in capsys.readouterr().err
+    assert export(MODEL, "--out", tmp_path / "nowhere" / "x.onnx") == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+#: (CLI flags, evaluate --option) of the comparisons: the trained rules truncated early, and birds five times as
+#: often as in training, so that every episode ends by a bird at a different step.
+CASES = [
+    ([], ["max_episode_steps=400"], ["--max-episode-steps", "400"]),
+    (["bird_prob"], ["bird_prob=0.05", "max_episode_steps=2000"], ["--bird-prob", "0.05", "--max-episode-steps", "2000"]),
+]
+
+
+@needs_torch
+@pytest.mark.parametrize("warned,options,flags", CASES, ids=["trained-rules", "more-birds"])
+def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(warned, options, flags, capsys):
+    exe = cli()
+    if exe is None:
+        pytest.skip("cargo is not installed: the comparison with `chopperscape demo --json` is skipped")
+    seed, episodes = 11, 6
+    args = [MODEL, "--episodes", episodes, "--seed", seed, "--per-episode"]
+    assert evaluate(*args, *[x for o in options for x in ("--option", o)]) == 0
+    expected = json.loads(capsys.readouterr().out)["per_episode"]
+    cmd = [str(exe), "demo", "--policy", str(EXPORT), "--episodes", str(episodes), "--seed", str(seed), "--json", *flags]
+    run = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    got = [json.loads(line) for line in run.stdout.splitlines()]
+    keys = ("seed", "return", "steps", "cause")
+    assert [{k: e[k] for k in keys} for e in got] == [{k: e[k] for k in keys} for e in expected]
+    for name in warned:
+        assert f"was trained with {name} " in run.stderr, run.stderr
+    if not warned:
+        assert "warning" not in run.stderr, run.stderr
+
+
+def test_cli_refuses_a_policy_file_it_cannot_run(tmp_path):
+    exe = cli()
+    if exe is None:
+        pytest.skip("cargo is not installed")
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(EXPORT.read_bytes()[:500])
+    for path, message in [(bad, "not a ChopperScape policy"), (tmp_path / "none.onnx", "cannot read")]:
+        run = subprocess.run([str(exe), "record", "--policy", str(path), "--out", str(tmp_path / "a.gif")],
+                             capture_output=True, text=True)
+        assert run.returncode == 2 and message in run.stderr and "panicked" not in run.stderr, run.stderr
+        assert not (tmp_path / "a.gif").exists()
+
+
+def _gif_frames(path: pathlib.Path) -> list[np.ndarray]:
+    from PIL import Image, ImageSequence
+
+    with Image.open(path) as im:
+        return [np.asarray(frame.convert("RGB")) for frame in ImageSequence.Iterator(im)]
+
+
+@needs_torch
+def test_evaluate_video_gif_shows_exactly_the_played_episodes(tmp_path, capsys):
+    from chopperscape.env import ChopperScapeEnv
+
+    out = tmp_path / "agent.gif"
+    assert evaluate(MODEL, "--episodes", 3, "--seed", 2, "--option", "bird_prob=0.2", "--per-episode",
+                    "--video", out, "--video-episodes", 2) == 0
+    result = json.loads(capsys.readouterr().out)
+    first_two = result["per_episode"][:2]
+    assert "actions" not in first_two[0] and result["video"] == str(out)
+    frames = _gif_frames(out)
+    assert len(frames) == sum(e["steps"] + 1 for e in first_two)
+    # The frames are the env's own, after reset and after every step of each episode in turn.
+    env = ChopperScapeEnv(render_mode="rgb_array", obs_type="features", bird_prob=0.2)
+    env.reset(seed=2)
+    assert np.array_equal(frames[0], env.render())
+    assert np.array_equal(frames[first_two[0]["steps"] + 1], (env.reset(seed=3), env.render())[1])
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def test_evaluate_video_mp4_and_its_errors(tmp_path, capsys, monkeypatch):
+    assert evaluate("heuristic", "--episodes", 2, "--video", tmp_path / "a.avi") == 2
+    assert "give a .gif or .mp4" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        evaluate("heuristic", "--episodes", 1, "--video", tmp_path / "a.gif", "--video-episodes", 2)
+    assert exit_.value.code == 2 and "--video-episodes 2" in capsys.readouterr().err
+    out = tmp_path / "a.mp4"
+    if shutil.which("ffmpeg") is not None:
+        assert evaluate("heuristic", "--episodes", 1, "--option", "max_episode_steps=60", "--video", out) == 0
+        capsys.readouterr()
+        probe = subprocess.run(["ffmpeg", "-i", str(out), "-f", "null", "-"], capture_output=True, text=True)
+        assert "frame=   61" in probe.stderr or "frame=61" in probe.stderr.replace(" ", ""), probe.stderr[-300:]
+        out.unlink()
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert evaluate("heuristic", "--episodes", 1, "--video", out) == 2
+    err = capsys.readouterr().err
+    assert "needs the ffmpeg program" in err and "Traceback" not in err
+    assert not out.exists()
