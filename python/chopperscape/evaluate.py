@@ -177,12 +177,7 @@ def load_recipe(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
     # One thread: a small MLP gains nothing from more, and OpenMP spinning under load can slow it by 100x.
     torch.set_num_threads(1)
     what = f"model file {str(path)!r}"
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
-        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-        raise ValueError(f"{what} is not a chopperscape.train model (it holds more than tensors and plain data, "
-                         f"or is damaged): {first}") from None
+    payload = read_checkpoint(path, what)
     agent, model_shape, norm, recipe = _recipe_from(payload, what)
     options = {"obs_type": recipe["obs_type"], **recipe["env_options"], **env_options}
     shape = _observation_shape(options)
@@ -205,6 +200,19 @@ def load_recipe(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
 
 def _describe(options: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v!r}" for k, v in options.items()) or "the defaults"
+
+
+def read_checkpoint(path: Path, what: str) -> Any:
+    """The payload of a `chopperscape.train` model file, read with `torch.load(weights_only=True)` (tensors and plain
+    data only: a crafted file cannot run code); `ValueError` in one line when the file is damaged or holds more."""
+    import torch
+
+    try:
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
+        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        raise ValueError(f"{what} is not a chopperscape.train model (it holds more than tensors and plain data, "
+                         f"or is damaged): {first}") from None
 
 
 def _recipe_from(payload: Any, what: str):

@@ -64,19 +64,12 @@ def _sha256(path: Path) -> str:
 def load(path: Path):
     """`(payload, agent, norm, env_options, env_shape)` of a recipe model; `ValueError` with one line for a
     missing file, one that is not a recipe model, or one that holds more than tensors and plain data."""
-    import torch
-
-    from .evaluate import _observation_shape, _recipe_from
+    from .evaluate import _observation_shape, _recipe_from, read_checkpoint
 
     what = f"model file {str(path)!r}"
     if not path.is_file():
         raise ValueError(f"{what} does not exist (give a model.pt from python -m chopperscape.train)")
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
-        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-        raise ValueError(f"{what} is not a chopperscape.train model (it holds more than tensors and plain data, "
-                         f"or is damaged): {first}") from None
+    payload = read_checkpoint(path, what)
     agent, model_shape, norm, recipe = _recipe_from(payload, what)
     # The env's own observation (the Rust env has no `keep_dim`: a grayscale frame without a channel axis).
     options = {k: v for k, v in recipe["env_options"].items() if k != "keep_dim"}
