@@ -5,7 +5,7 @@
 Prints one line per case: the single env (`features`, and `rgb` 600 × 800) through `gymnasium.make` (with its
 wrappers) and through the environment's own `step`; the native vector env (`features`, `grayscale` 84 × 84) at
 N = 64 and 1024 with 1 and 2 threads, copy-free (`copy=False`) and with fresh arrays (`copy=True`, the default);
-SB3 `VecEnv`s (when stable-baselines3 is installed): the native adapter `chopperscape.sb3.ChopperScapeVecEnv`
+SB3 `VecEnv`s (when stable-baselines3 is installed): the native adapter `chopperscape.integrations.sb3.ChopperScapeVecEnv`
 against SB3's own `make_vec_env` (a `DummyVecEnv` of `Monitor`-wrapped envs), at N = 8 and 64; and Gymnasium's
 CartPole-v1 as a yardstick.
 """
@@ -84,7 +84,7 @@ def vector(num_envs: int, threads: int, copy: bool, **options):
 
 def sb3_vec(kind: str, num_envs: int):
     if kind == "native":
-        from chopperscape.sb3 import ChopperScapeVecEnv
+        from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
         envs = ChopperScapeVecEnv(num_envs, seed=0, obs_type="features")
     else:

@@ -2,7 +2,7 @@
 
     .venv/bin/python python/bench_train.py [--steps 8192] [--case small-84 ...] [--device cpu]
 
-For each case it runs ``chopperscape.train`` (the pixel preset's settings: 32 envs × 128 steps, 4 epochs of 4
+For each case it runs ``chopperscape.learn.train`` (the pixel preset's settings: 32 envs × 128 steps, 4 epochs of 4
 minibatches, frame skip 4, 4 stacked frames; the features case uses the features recipe) for ``--steps`` env steps
 and prints env steps (decisions) per second of wall time and per CPU second of this process, and where the CPU time
 goes: the env alone (rendering included), the network's forward passes in the rollout, and one optimisation epoch's
@@ -26,9 +26,11 @@ sys.path = [p for p in sys.path if os.path.abspath(p or ".") != os.path.dirname(
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from chopperscape import VectorEnv, train  # noqa: E402
+from chopperscape import VectorEnv  # noqa: E402
+from chopperscape.learn import model, train  # noqa: E402
+from chopperscape.learn.recipe import PRESETS, Recipe, network_of  # noqa: E402
 
-PIXELS = train.PRESETS["pixels"]
+PIXELS = PRESETS["pixels"]
 CASES = {
     "features-mlp": dict(obs_type="features", network="mlp", env_options={}),
     "nature-84": dict(network="nature", env_options={**PIXELS["env_options"], "obs_size": [84, 84]}),
@@ -37,12 +39,12 @@ CASES = {
 }
 
 
-def recipe_for(case: str, steps: int, device: str) -> train.Recipe:
+def recipe_for(case: str, steps: int, device: str) -> Recipe:
     settings = {k: v for k, v in PIXELS.items() if k != "env_options"} if case != "features-mlp" else {}
-    return train.Recipe(**{**settings, **CASES[case]}, total_steps=steps, device=device)
+    return Recipe(**{**settings, **CASES[case]}, total_steps=steps, device=device)
 
 
-def parts(recipe: train.Recipe, repeats: int = 3) -> dict[str, float]:
+def parts(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
     """CPU seconds per env step of the loop's parts, each measured alone."""
     n = recipe.num_envs
     envs = VectorEnv(n, num_threads=1, obs_type=recipe.obs_type, **recipe.env_options)
@@ -52,7 +54,7 @@ def parts(recipe: train.Recipe, repeats: int = 3) -> dict[str, float]:
     for _ in range(repeats * 20):
         obs, *_ = envs.step(actions)
     env = (time.process_time() - t) / (repeats * 20 * n)
-    agent = train.build_agent(train.network_of(recipe), tuple(envs.single_observation_space.shape)).to(recipe.device)
+    agent = model.build_agent(network_of(recipe), tuple(envs.single_observation_space.shape)).to(recipe.device)
     envs.close()
     x = torch.from_numpy(np.ascontiguousarray(obs)).to(recipe.device)
     if recipe.obs_type == "features":

@@ -1,4 +1,4 @@
-"""What the package's command lines (`python -m chopperscape.train`, `.evaluate`, `.datasets`) share: reading
+"""What the package's command lines (`python -m chopperscape.learn.train`, `.evaluate`, `.datasets`) share: reading
 `--option NAME=VALUE` per option type, and writing the result line to standard output."""
 
 from __future__ import annotations

@@ -87,7 +87,8 @@ def main() -> None:
 
     import torch
 
-    from chopperscape import datasets, pilots
+    from chopperscape import pilots
+    from chopperscape.integrations import datasets
 
     torch.set_num_threads(1)
     start = time.monotonic()

@@ -11,7 +11,7 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecNormalize
 
-from chopperscape.sb3 import ChopperScapeVecEnv
+from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
 torch.set_num_threads(1)
 for normalised in (False, True):

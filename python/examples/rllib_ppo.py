@@ -125,84 +125,27 @@ def collect_episodes(env_runner: Any) -> list[tuple[int, float, int]]:
 
 def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
     """(runner index, env steps it sampled, game seeds of its sub-envs, process id, Ray node id) of a runner."""
-    import chopperscape.rllib
+    import chopperscape.integrations.rllib
     import ray
 
     return (
         int(env_runner.worker_index or 0),
         int(env_runner.__dict__.get(_SAMPLED, 0)),
-        chopperscape.rllib.runner_seeds(env_runner),
+        chopperscape.integrations.rllib.runner_seeds(env_runner),
         os.getpid(),
         ray.get_runtime_context().get_node_id(),
     )
 
 
-def return_scaled_learner():
-    """A PPO learner that divides rewards by the running standard deviation of the discounted return before
-    GAE, as the single-machine recipe does (and SB3's VecNormalize): RLlib has no reward normaliser for the new API
-    stack. The episode returns the env runners report stay the game's own."""
-    import numpy as np
-    from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
-    from ray.rllib.connectors.connector_v2 import ConnectorV2
-    from ray.rllib.connectors.learner import GeneralAdvantageEstimation
-    from ray.rllib.core.columns import Columns
-
-    class ReturnScaling(ConnectorV2):
-        def __init__(self, input_observation_space=None, input_action_space=None, *, gamma: float = 0.99, **kw):
-            super().__init__(input_observation_space, input_action_space, **kw)
-            self.gamma = gamma
-            self.mean, self.var, self.count = 0.0, 1.0, 1e-4
-
-        def __call__(self, *, rl_module, batch, episodes, **kwargs):
-            lens = [len(e) for e in self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False)]
-            for module_batch in batch.values():
-                rewards = module_batch[Columns.REWARDS]
-                r = rewards.detach().cpu().numpy() if hasattr(rewards, "detach") else np.asarray(rewards)
-                r = r.astype(np.float64)
-                if r.shape[0] != sum(lens):
-                    continue  # not one row per episode step (padded): leave it
-                # Discounted return accumulated forward within each episode chunk.
-                returns, start = np.empty_like(r), 0
-                for n in lens:
-                    acc = 0.0
-                    for t in range(start, start + n):
-                        acc = acc * self.gamma + r[t]
-                        returns[t] = acc
-                    start += n
-                m, v, k = returns.mean(), returns.var(), returns.shape[0]
-                delta, total = m - self.mean, self.count + k
-                self.mean += delta * k / total
-                self.var = (self.var * self.count + v * k + delta**2 * self.count * k / total) / total
-                self.count = total
-                scale = 1.0 / np.sqrt(self.var + 1e-8)
-                module_batch[Columns.REWARDS] = rewards * scale
-            return batch
-
-        def get_state(self, components=None, *, not_components=None, **kwargs):
-            return {"mean": self.mean, "var": self.var, "count": self.count}
-
-        def set_state(self, state):
-            self.mean, self.var, self.count = state["mean"], state["var"], state["count"]
-
-    class ReturnScaledPPOLearner(PPOTorchLearner):
-        def build(self) -> None:
-            super().build()
-            if self._learner_connector is not None:
-                scaling = ReturnScaling(gamma=self.config.gamma)
-                self._learner_connector.insert_before(GeneralAdvantageEstimation, scaling)
-
-    return ReturnScaledPPOLearner
-
-
 def build_config(args: argparse.Namespace):
-    import chopperscape.rllib  # registers "ChopperScape-v0" with RLlib
+    import chopperscape.integrations.rllib  # registers "ChopperScape-v0" with RLlib
     from ray.rllib.algorithms.ppo import PPOConfig
     from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 
     return (
         PPOConfig()
-        .environment(chopperscape.rllib.ENV_NAME, env_config=args.env_config)
+        .environment(chopperscape.integrations.rllib.ENV_NAME, env_config=args.env_config)
         .env_runners(
             num_env_runners=args.env_runners,
             num_envs_per_env_runner=args.envs_per_runner,
@@ -213,7 +156,7 @@ def build_config(args: argparse.Namespace):
             env_to_module_connector=(
                 (lambda env, spaces, device: MeanStdFilter())
                 if args.env_config.get("obs_type") == "features"
-                else (lambda env, spaces, device: chopperscape.rllib.FloatPixels())
+                else (lambda env, spaces, device: chopperscape.integrations.rllib.FloatPixels())
             ),
         )
         .training(
@@ -228,7 +171,7 @@ def build_config(args: argparse.Namespace):
             vf_clip_param=math.inf,  # rewards are scaled (below); RLlib's default clips the value loss at 10
             grad_clip=0.5,
         )
-        .learners(learner_class=return_scaled_learner() if args.norm_reward else None)
+        .learners(learner_class=chopperscape.integrations.rllib.ReturnScaledPPOLearner if args.norm_reward else None)
         .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=args.hidden, vf_share_layers=False))
         .callbacks(on_episode_end=record_episode, on_sample_end=count_steps)
         .debugging(seed=args.seed)
@@ -272,11 +215,11 @@ def main(argv: list[str] | None = None) -> int:
     # Ray limits its workers' threads to their CPUs, not the driver's: torch's default (all cores) oversubscribes
     # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
     torch.set_num_threads(args.torch_threads)
-    import chopperscape.rllib
-    from chopperscape import progress
+    import chopperscape.integrations.rllib
+    from chopperscape.learn import progress
 
     try:
-        chopperscape.rllib.check_env_config(args.env_config)
+        chopperscape.integrations.rllib.check_env_config(args.env_config)
     except ValueError as e:
         raise SystemExit(f"error: {e}") from None
     connect(args)

@@ -3,12 +3,12 @@
     python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-default            # SB3's defaults
     python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
 
-`--tuned` uses what ``chopperscape.train`` uses (γ = 0.999, 64 envs × 256 steps, entropy 0.01, [128, 128] tanh,
+`--tuned` uses what ``chopperscape.learn.train`` uses (γ = 0.999, 64 envs × 256 steps, entropy 0.01, [128, 128] tanh,
 observations and rewards normalised by ``VecNormalize``). The model is saved as ``OUT/model.zip`` (and, with
 ``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
-``python -m chopperscape.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
+``python -m chopperscape.learn.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
 training with ``VecNormalize.load``); ``progress.csv`` has the return columns of
-:mod:`chopperscape.progress`, drawn by ``python -m chopperscape.plot``.
+:mod:`chopperscape.learn.progress`, drawn by ``python -m chopperscape.learn.plot``.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from chopperscape import progress
-from chopperscape.sb3 import ChopperScapeVecEnv, save_normalization
+from chopperscape.learn import progress
+from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
 
 
 class ProgressCsv(BaseCallback):

@@ -16,7 +16,7 @@ from chopperscape import pilots
 minari = pytest.importorskip("minari", reason="minari is not installed (pip install 'minari[hdf5]' pillow)")
 pytest.importorskip("h5py", reason="h5py is not installed (pip install 'minari[hdf5]')")
 pytest.importorskip("PIL", reason="pillow is not installed (Minari's HDF5 storage imports it)")
-from chopperscape import datasets  # noqa: E402
+from chopperscape.integrations import datasets  # noqa: E402
 
 from test_pilots import cli  # noqa: E402
 
@@ -180,7 +180,7 @@ def test_the_cli_dataset_command_runs_the_python_package(datasets_path, tmp_path
     missing = subprocess.run(args[:-1] + ["cs/never-v0"], env={**env, "CHOPPERSCAPE_PYTHON": str(bare)},
                              capture_output=True, text=True)
     assert missing.returncode == 1
-    assert "cannot import chopperscape.datasets" in missing.stderr and "pip install" in missing.stderr
+    assert "cannot import chopperscape.integrations.datasets" in missing.stderr and "pip install" in missing.stderr
     assert not (datasets_path / "cs" / "never-v0").exists()
 
 

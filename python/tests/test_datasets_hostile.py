@@ -7,20 +7,19 @@ from __future__ import annotations
 import json
 import os
 import pathlib
-import resource
 import signal
 import subprocess
 import sys
 import time
 
-import numpy as np
 import pytest
 
 pytest.importorskip("minari", reason="minari is not installed (pip install 'minari[hdf5]' pillow)")
 pytest.importorskip("h5py", reason="h5py is not installed (pip install 'minari[hdf5]')")
 import minari  # noqa: E402
 
-from chopperscape import _cli, datasets, pilots  # noqa: E402
+from chopperscape import _cli, pilots  # noqa: E402
+from chopperscape.integrations import datasets  # noqa: E402
 
 from test_pilots import cli  # noqa: E402
 
@@ -55,7 +54,7 @@ def wait_for_temp(folder: pathlib.Path, proc: subprocess.Popen, timeout: float =
 
 
 def module(*args: str, **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "chopperscape.datasets", *args], stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "chopperscape.integrations.datasets", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, **kw)
 
 
@@ -177,7 +176,7 @@ def test_a_second_writer_of_one_id_is_refused_before_it_collects(datasets_path, 
 FULL = """
 import resource, sys
 resource.setrlimit(resource.RLIMIT_FSIZE, (20 << 20, 20 << 20))
-from chopperscape import datasets
+from chopperscape.integrations import datasets
 sys.exit(datasets.main(sys.argv[1:]))
 """
 

@@ -1,5 +1,5 @@
-"""Trained policies everywhere (issue 19): the ONNX export (`python -m chopperscape.export`), the command line
-playing it (`chopperscape demo --policy MODEL.onnx`) the same episodes as `python -m chopperscape.evaluate MODEL.pt`,
+"""Trained policies everywhere (issue 19): the ONNX export (`python -m chopperscape.learn.export`), the command line
+playing it (`chopperscape demo --policy MODEL.onnx`) the same episodes as `python -m chopperscape.learn.evaluate MODEL.pt`,
 and videos from `evaluate --video`."""
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ EXPORT = ROOT / "models" / "ppo-features.onnx"
 
 
 def export(*args) -> int:
-    from chopperscape import export as ex
+    from chopperscape.learn import export as ex
 
     return ex.main([str(a) for a in args])
 
 
 def evaluate(*args) -> int:
-    from chopperscape import evaluate as ev
+    from chopperscape.learn import evaluate as ev
 
     return ev.main([str(a) for a in args])
 
@@ -42,12 +42,13 @@ def make_pixel_model(path: pathlib.Path) -> None:
     the export of."""
     import torch
 
-    from chopperscape import train
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import PRESETS, Recipe
 
     torch.manual_seed(0)
     shape = (84, 84, 4)
-    recipe = train.Recipe(**train.PRESETS["pixels"])
-    train.save(path, train.build_agent("small", shape, 5), train.ObsNormalizer(shape, False), recipe, shape, 0)
+    recipe = Recipe(**PRESETS["pixels"])
+    model.save(path, model.build_agent("small", shape, 5), model.ObsNormalizer(shape, False), recipe, shape, 0)
 
 
 def metadata(path: pathlib.Path) -> dict[str, str]:
@@ -109,8 +110,8 @@ def test_bad_models_and_outputs_are_one_line_errors(tmp_path, capsys):
     text.write_text("not a model")
     cases = [
         (tmp_path / "missing.pt", "does not exist"),
-        (text, "is not a chopperscape.train model"),
-        (hostile, "is not a chopperscape.train model"),
+        (text, "is not a chopperscape.learn.train model"),
+        (hostile, "is not a chopperscape.learn.train model"),
     ]
     for model, message in cases:
         assert export(model, "--out", tmp_path / "x.onnx") == 2

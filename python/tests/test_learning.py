@@ -27,9 +27,10 @@ needs_sb3 = pytest.mark.skipif(
 
 @needs_torch
 def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
-    from chopperscape import evaluate, train
+    from chopperscape.learn import evaluate, train
+    from chopperscape.learn.recipe import Recipe
 
-    recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 200}, hidden=32, total_steps=3000)
+    recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 200}, hidden=32, total_steps=3000)
     path = train.train(recipe, tmp_path)
     rows = (tmp_path / "progress.csv").read_text().splitlines()
     assert rows[0] == ",".join(train.CSV_COLUMNS)
@@ -61,10 +62,11 @@ def _progress(path):
 
 @needs_torch
 def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_path):
-    from chopperscape import train
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
 
     def run(name, **kw):
-        recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000,
+        recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000,
                               **kw)
         train.train(recipe, tmp_path / name)
         return _progress(tmp_path / name / "progress.csv")
@@ -86,9 +88,10 @@ def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_pat
 
 @needs_torch
 def test_progress_diagnostics_are_sane(tmp_path):
-    from chopperscape import train
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
 
-    recipe = train.Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 100}, hidden=16, total_steps=4000)
+    recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 100}, hidden=16, total_steps=4000)
     train.train(recipe, tmp_path)
     rows = _progress(tmp_path / "progress.csv")
     for r in rows:
@@ -111,7 +114,7 @@ def test_progress_diagnostics_are_sane(tmp_path):
 @needs_torch
 def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     import chopperscape
-    from chopperscape import evaluate, train
+    from chopperscape.learn import evaluate, model, train
 
     # The pixel preset at a smoke size: small frames, few envs; the same code path as the full recipe.
     out = tmp_path / "px"
@@ -129,36 +132,36 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     assert payload["obs_shape"] == [42, 42, 4] and payload["pixels_version"] == chopperscape.PIXELS_VERSION
     # A model of another pixel layout is refused, naming both versions.
     with pytest.raises(ValueError, match=f"pixel layout v1, and this chopperscape draws v{chopperscape.PIXELS_VERSION}"):
-        train.agent_from_checkpoint({**payload, "pixels_version": 1})
-    agent = train.agent_from_checkpoint(payload)
-    assert isinstance(agent, train.CnnAgent)
+        model.agent_from_checkpoint({**payload, "pixels_version": 1})
+    agent = model.agent_from_checkpoint(payload)
+    assert isinstance(agent, model.CnnAgent)
     # The frame skip, stack and size came back from the model: evaluation plays the frames it was trained on.
     assert evaluate.main([str(out / "model.pt"), "--episodes", "2", "--seed", "9", "--per-episode"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["episodes"] == 2 and all(e["return"] % 4 == 0 or e["cause"] == "bird" for e in res["per_episode"])
     # Reloading gives the same greedy actions on the same frames.
     env_obs = np.random.default_rng(0).integers(0, 256, (3, 42, 42, 4), dtype=np.uint8)
-    again = train.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
+    again = model.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
     with torch.no_grad():
         assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
 
 
 def test_networks_refuse_observations_they_cannot_take():
     pytest.importorskip("torch")
-    from chopperscape import train
+    from chopperscape.learn import model
 
     with pytest.raises(ValueError, match="mlp network takes vector observations"):
-        train.build_agent("mlp", (84, 84, 4))
+        model.build_agent("mlp", (84, 84, 4))
     with pytest.raises(ValueError, match="takes grayscale frames"):
-        train.build_agent("small", (46,))
+        model.build_agent("small", (46,))
     with pytest.raises(ValueError, match="too small"):
-        train.build_agent("nature", (16, 16, 4))
+        model.build_agent("nature", (16, 16, 4))
     with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature'"):
-        train.build_agent("resnet", (84, 84, 4))
+        model.build_agent("resnet", (84, 84, 4))
 
 
 def test_iqm_and_bootstrap_match_their_definitions():
-    from chopperscape.seeds import bootstrap_ci, iqm, parse_seeds
+    from chopperscape.learn.seeds import bootstrap_ci, iqm, parse_seeds
 
     assert parse_seeds("0-3,7, 2") == [0, 1, 2, 3, 7] and parse_seeds("1,0,2-3") == [1, 0, 2, 3]
     for bad in ("", "a", "3-1", "-1", "0-5000"):
@@ -179,7 +182,7 @@ def test_iqm_and_bootstrap_match_their_definitions():
 
 @needs_torch
 def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, capsys):
-    from chopperscape import train
+    from chopperscape.learn import train
 
     out = tmp_path / "bench"
     args = ["--seeds", "0-1", "--steps", "2000", "--out", str(out), "--eval-episodes", "3", "--jobs", "2",
@@ -202,7 +205,8 @@ def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, ca
 
 
 def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
-    from chopperscape import evaluate, pilots
+    from chopperscape import pilots
+    from chopperscape.learn import evaluate
 
     assert evaluate.main(["random", "--episodes", "3", "--seed", "4", "--per-episode",
                           "--option", "max_fuel=300"]) == 0
@@ -215,7 +219,7 @@ def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
 
 @needs_torch
 def test_evaluate_names_a_bad_model_file(tmp_path, capsys):
-    from chopperscape import evaluate
+    from chopperscape.learn import evaluate
 
     bad = tmp_path / "model.pt"
     bad.write_bytes(b"not a model")
@@ -226,7 +230,7 @@ def test_evaluate_names_a_bad_model_file(tmp_path, capsys):
 
 
 def test_evaluation_episodes_replay_single_envs():
-    from chopperscape.evaluate import play_episodes
+    from chopperscape.learn.evaluate import play_episodes
 
     results = play_episodes(lambda obs, envs: np.full(len(obs), 4), 3, 5, dict(SHORT))
     for r in results:
@@ -245,7 +249,7 @@ def test_evaluation_episodes_replay_single_envs():
 def test_sb3_adapter_equals_make_vec_env_trajectory_for_trajectory():
     from stable_baselines3.common.env_util import make_vec_env
 
-    from chopperscape.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
     options = dict(SHORT, lives=2)
     ref = make_vec_env("ChopperScape-v0", n_envs=3, seed=11, env_kwargs=options)
@@ -272,7 +276,7 @@ def test_sb3_adapter_equals_make_vec_env_trajectory_for_trajectory():
 
 @needs_sb3
 def test_sb3_adapter_reports_truncation_as_sb3_does():
-    from chopperscape.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
     env = ChopperScapeVecEnv(2, seed=0, obs_type="features", bird_prob=0.0, max_episode_steps=5)
     env.reset()
@@ -291,7 +295,7 @@ def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
     from stable_baselines3 import PPO
     from stable_baselines3.common.evaluation import evaluate_policy
 
-    from chopperscape.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
     env = ChopperScapeVecEnv(4, seed=0, obs_type="features", max_fuel=200)
     model = PPO("MlpPolicy", env, n_steps=128, batch_size=128, n_epochs=1, seed=0, device="cpu")
@@ -314,7 +318,7 @@ def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
 def test_sb3_cnn_policy_accepts_grayscale_with_a_channel_axis():
     from stable_baselines3 import PPO
 
-    from chopperscape.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
     env = ChopperScapeVecEnv(2, seed=0, obs_type="grayscale", obs_size=(84, 84), max_fuel=100)
     assert env.observation_space.shape == (84, 84, 1)
@@ -351,7 +355,7 @@ def test_gymnasium_vector_wrappers_on_the_native_batch():
 
 def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
     pytest.importorskip("matplotlib", reason="matplotlib is not installed")
-    from chopperscape import plot
+    from chopperscape.learn import plot
 
     good = tmp_path / "run" / "progress.csv"
     good.parent.mkdir()
@@ -398,10 +402,10 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from chopperscape import evaluate
-    from chopperscape.sb3 import ChopperScapeVecEnv
+    from chopperscape.learn import evaluate
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
-    from chopperscape.sb3 import save_normalization
+    from chopperscape.integrations.sb3 import save_normalization
 
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=1, device="cpu").learn(128)
@@ -414,7 +418,7 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     assert out["episodes"] == 2 and set(out["causes"]) <= {"bird", "fuel", "truncated"} and out["greedy"]
     # The statistics are applied: the normaliser evaluate loads is VecNormalize's own transform, and every
     # observation the model acts on went through it.
-    from chopperscape import sb3
+    from chopperscape.integrations import sb3
 
     norm = sb3.load_normalization(tmp_path, False)
     obs = env.get_original_obs()

@@ -37,7 +37,7 @@ class Payload:
 
 
 def evaluate(*args: str) -> int:
-    from chopperscape import evaluate as ev
+    from chopperscape.learn import evaluate as ev
 
     return ev.main([str(a) for a in args])
 
@@ -54,7 +54,7 @@ def test_a_crafted_model_pt_runs_no_code_in_either_pickle_form(tmp_path, capsys)
     for path in (plain, zipped):
         assert evaluate(path, "--episodes", "1") == 2
         err = capsys.readouterr().err
-        assert "is not a chopperscape.train model" in err and path.name in err, err
+        assert "is not a chopperscape.learn.train model" in err and path.name in err, err
         assert not marker.exists(), f"loading {path.name} ran code from it"
 
 
@@ -62,16 +62,17 @@ def test_a_crafted_model_pt_runs_no_code_in_either_pickle_form(tmp_path, capsys)
 def test_recipe_models_load_with_weights_only(tmp_path, capsys):
     import torch
 
-    from chopperscape import train
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import Recipe
 
     # The committed policy and a freshly saved one are tensors and plain data.
     committed = torch.load(ROOT / "models" / "ppo-features.pt", map_location="cpu", weights_only=True)
     assert committed["format"] == "chopperscape-ppo/1"
-    recipe = train.Recipe(hidden=8, env_options={"obs_size": (84, 84), "max_fuel": 300})
-    agent = train.Agent(46, 5, 8)
-    norm = train.ObsNormalizer((46,))
+    recipe = Recipe(hidden=8, env_options={"obs_size": (84, 84), "max_fuel": 300})
+    agent = model.Agent(46, 5, 8)
+    norm = model.ObsNormalizer((46,))
     norm.rms.update(torch.rand(10, 46).numpy())
-    train.save(tmp_path / "model.pt", agent, norm, recipe, (46,), 123)
+    model.save(tmp_path / "model.pt", agent, norm, recipe, (46,), 123)
     back = torch.load(tmp_path / "model.pt", map_location="cpu", weights_only=True)
     assert back["recipe"]["env_options"] == {"obs_size": [84, 84], "max_fuel": 300} and back["env_steps"] == 123
     assert not list(tmp_path.glob(".*part"))
@@ -82,9 +83,10 @@ def test_recipe_models_load_with_weights_only(tmp_path, capsys):
 
 @needs_torch
 def test_a_model_whose_input_does_not_fit_the_options_is_a_clear_error(tmp_path, capsys):
-    from chopperscape import train
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import Recipe
 
-    train.save(tmp_path / "model.pt", train.Agent(46, 5, 8), train.ObsNormalizer((46,)), train.Recipe(hidden=8), (46,), 0)
+    model.save(tmp_path / "model.pt", model.Agent(46, 5, 8), model.ObsNormalizer((46,)), Recipe(hidden=8), (46,), 0)
     assert evaluate(tmp_path / "model.pt", "--episodes", "1", "--option", "frame_stack=2") == 2
     err = capsys.readouterr().err
     assert "takes observations of shape (46,)" in err and "(92,)" in err and "Traceback" not in err, err
@@ -135,7 +137,7 @@ def sb3_model(tmp_path_factory):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from chopperscape.sb3 import ChopperScapeVecEnv, save_normalization
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
 
     folder = tmp_path_factory.mktemp("sb3")
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)

@@ -1,10 +1,10 @@
-"""The progress CSV schema (chopperscape.progress): what every learner writes and plot/seeds read."""
+"""The progress CSV schema (chopperscape.learn.progress): what every learner writes and plot/seeds read."""
 
 import math
 
 import pytest
 
-from chopperscape import progress
+from chopperscape.learn import progress
 
 
 def test_a_writer_writes_the_header_and_flushes_every_row(tmp_path):

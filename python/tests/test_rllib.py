@@ -30,8 +30,8 @@ pytest.importorskip("ray.rllib", reason="RLlib is not installed: pip install 'ra
 pytest.importorskip("torch", reason="torch is not installed (RLlib's PPO needs it): pip install torch")
 
 import chopperscape  # noqa: E402
-import chopperscape.rllib as crl  # noqa: E402
-from chopperscape import progress  # noqa: E402
+import chopperscape.integrations.rllib as crl  # noqa: E402
+from chopperscape.learn import progress  # noqa: E402
 import gymnasium as gym  # noqa: E402
 from ray.rllib.algorithms.ppo import PPOConfig  # noqa: E402
 from ray.rllib.env.env_context import EnvContext  # noqa: E402

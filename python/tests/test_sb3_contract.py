@@ -13,7 +13,7 @@ pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not instal
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
 from stable_baselines3.common.monitor import Monitor  # noqa: E402
 
-from chopperscape.sb3 import ChopperScapeVecEnv  # noqa: E402
+from chopperscape.integrations.sb3 import ChopperScapeVecEnv  # noqa: E402
 
 N = 4
 

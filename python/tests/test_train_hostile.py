@@ -14,7 +14,8 @@ import time
 import pytest
 
 torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
-from chopperscape import train  # noqa: E402
+from chopperscape.learn import model, train  # noqa: E402
+from chopperscape.learn.recipe import Recipe  # noqa: E402
 
 #: A recipe that runs an update in a fraction of a second.
 SMALL = ["--num-envs", "4", "--num-steps", "32", "--hidden", "8", "--num-minibatches", "2", "--update-epochs", "1"]
@@ -47,15 +48,15 @@ def test_bad_settings_are_refused_before_anything_is_written(args, named, tmp_pa
 
 def test_the_train_function_checks_its_arguments_too(tmp_path):
     with pytest.raises(ValueError, match="num_envs"):
-        train.train(train.Recipe(num_envs=0, total_steps=100), tmp_path / "a")
+        train.train(Recipe(num_envs=0, total_steps=100), tmp_path / "a")
     with pytest.raises(ValueError, match="minutes"):
-        train.train(train.Recipe(total_steps=100), tmp_path / "a", minutes=float("nan"))
+        train.train(Recipe(total_steps=100), tmp_path / "a", minutes=float("nan"))
     with pytest.raises(ValueError, match="total_steps"):
-        train.train(train.Recipe(total_steps=0), tmp_path / "a")
+        train.train(Recipe(total_steps=0), tmp_path / "a")
     with pytest.raises(ValueError, match="network"):
-        train.train(train.Recipe(network="resnet", total_steps=100), tmp_path / "a")
+        train.train(Recipe(network="resnet", total_steps=100), tmp_path / "a")
     with pytest.raises(ValueError, match="env option `num_threads`"):
-        train.train(train.Recipe(env_options={"num_threads": 2}, total_steps=100), tmp_path / "a")
+        train.train(Recipe(env_options={"num_threads": 2}, total_steps=100), tmp_path / "a")
     assert not (tmp_path / "a").exists()
 
 
@@ -89,7 +90,7 @@ def test_force_starts_the_run_over(tmp_path):
 
 def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_path):
     run = tmp_path / "run"
-    proc = subprocess.Popen([sys.executable, "-m", "chopperscape.train", "--out", str(run), "--minutes", "5", *SMALL],
+    proc = subprocess.Popen([sys.executable, "-m", "chopperscape.learn.train", "--out", str(run), "--minutes", "5", *SMALL],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
@@ -110,7 +111,7 @@ def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_
 def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatch):
     made = []
 
-    class Poisoned(train.Agent):
+    class Poisoned(model.Agent):
         def __init__(self, *a):
             super().__init__(*a)
             made.append(self)
@@ -118,8 +119,8 @@ def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatc
         def value(self, x):
             return super().value(x) * float("nan")
 
-    monkeypatch.setattr(train, "Agent", Poisoned)
-    recipe = train.Recipe(num_envs=4, num_steps=32, hidden=8, num_minibatches=2, total_steps=10_000)
+    monkeypatch.setattr(model, "Agent", Poisoned)
+    recipe = Recipe(num_envs=4, num_steps=32, hidden=8, num_minibatches=2, total_steps=10_000)
     with pytest.raises(FloatingPointError, match="loss became nan"):
         train.train(recipe, tmp_path / "run")
     (agent,) = made

@@ -1,4 +1,4 @@
-"""Videos of played episodes, for ``python -m chopperscape.evaluate --video``: GIF through Pillow, MP4 through
+"""Videos of played episodes, for ``python -m chopperscape.learn.evaluate --video``: GIF through Pillow, MP4 through
 the ``ffmpeg`` program.
 
 Episodes are replayed from their actions on an env that observes features (the rules decide everything; the
@@ -43,7 +43,7 @@ def check_destination(path: Path) -> None:
 def frames(options: dict[str, Any], episodes: list[dict[str, Any]]) -> Iterator[np.ndarray]:
     """Every frame of `episodes` (each a `play_episodes` result with `seed` and `actions`): after reset and after
     each action."""
-    from .env import ChopperScapeEnv
+    from ..env import ChopperScapeEnv
 
     rules = {k: v for k, v in options.items() if k not in OBSERVATION_OPTIONS}
     # The env itself never truncates: each episode's actions end where it ended.

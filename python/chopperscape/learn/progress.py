@@ -1,8 +1,8 @@
 """The learning-curve CSV: one schema for every learner here and every reader.
 
-Writers: ``python -m chopperscape.train`` (all columns), the SB3 and RLlib examples (the :data:`RETURNS` columns;
-they have no per-update diagnostics of their own). Readers: ``python -m chopperscape.plot`` and
-``python -m chopperscape.seeds``. One row per update (train) or per rollout/iteration (the examples):
+Writers: ``python -m chopperscape.learn.train`` (all columns), the SB3 and RLlib examples (the :data:`RETURNS` columns;
+they have no per-update diagnostics of their own). Readers: ``python -m chopperscape.learn.plot`` and
+``python -m chopperscape.learn.seeds``. One row per update (train) or per rollout/iteration (the examples):
 
 - :data:`RETURNS`: env steps so far, wall seconds, episodes finished so far, and the mean, standard deviation and
   mean length of the last 100 finished episodes (blank until one has finished);
@@ -23,7 +23,7 @@ from typing import Any, TextIO
 RETURNS = ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length")
 DIAGNOSTICS = ("learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss")
 ENDINGS = ("ended", "bird", "fuel", "limit")
-#: The columns ``chopperscape.train`` writes, in order.
+#: The columns ``chopperscape.learn.train`` writes, in order.
 COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS
 
 

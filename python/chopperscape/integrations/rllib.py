@@ -1,0 +1,280 @@
+"""ChopperScape-v0 for Ray RLlib's new API stack: the env by name, every option through `env_config`,
+one native `VectorEnv` per env runner, and seeds that differ across runners and sub-envs.
+
+Importing this module registers `"ChopperScape-v0"` with RLlib (`ray.tune.registry.register_env`);
+`import chopperscape` alone never imports Ray.
+
+>>> import chopperscape.integrations.rllib
+>>> from ray.rllib.algorithms.ppo import PPOConfig
+>>> config = (
+...     PPOConfig()
+...     .environment("ChopperScape-v0", env_config={"obs_type": "features"})
+...     .env_runners(num_env_runners=2, num_envs_per_env_runner=16,
+...                  gym_env_vectorize_mode="vector_entry_point")  # the native batch; "sync" for Python sub-envs
+... )
+
+How RLlib builds the env of each runner (`SingleAgentEnvRunner.make_env`), and what this module does there:
+
+- `gym_env_vectorize_mode="vector_entry_point"`: RLlib calls `env_creator(env_config | {"num_envs": n})` once
+  per runner; we return one `chopperscape.VectorEnv` of `n` envs, stepped by one Rust call a batch with the GIL
+  released. Its threads default to the CPUs Ray gave the runner (`OMP_NUM_THREADS`, which Ray sets to
+  `num_cpus_per_env_runner`), at most one per 64 envs; `env_config["num_threads"]` overrides.
+- `"sync"` (RLlib's default) or `"async"`: RLlib calls `env_creator(EnvContext)` once per sub-env and batches the
+  `n` Python envs in Gymnasium's `SyncVectorEnv` / `AsyncVectorEnv`; we return `gym.make("ChopperScape-v0")`.
+
+Seeds. RLlib resets runner `w` once with `seed = config.seed + w` (+10**6 on evaluation runners), and Gymnasium's
+vectors give sub-env `i` the seed `seed + i`, so runner 1's env 1 and runner 2's env 0 would play the same game.
+This module remaps, so that no two sub-envs anywhere share a seed (for seeds below 2**43 and fewer than 2**20
+runners and envs per runner):
+
+- native batch: sub-env `i` of the runner reset with `s` gets `s * SEED_STRIDE + i`;
+- Python sub-envs: the sub-env reset with `x` (= `s + i`) by its runner `w` gets `x * SEED_STRIDE + w`.
+
+(The vector creator is not told its runner's index by RLlib, the single-env creator not its place in the vector,
+hence two formulas; each is one-to-one.) With `config.seed` unset every env draws its seed from OS entropy.
+`runner_seeds(env_runner)` returns the seeds a runner's envs were last reset with.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from gymnasium.wrappers.utils import RunningMeanStd
+
+from ..vector import VectorEnv
+
+try:
+    from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
+    from ray.rllib.connectors.connector_v2 import ConnectorV2
+    from ray.rllib.connectors.env_to_module.observation_preprocessor import SingleAgentObservationPreprocessor
+    from ray.rllib.connectors.learner import GeneralAdvantageEstimation
+    from ray.rllib.core.columns import Columns
+    from ray.tune.registry import register_env
+except ImportError as e:  # pragma: no cover - depends on the installation
+    raise ImportError(
+        "chopperscape.integrations.rllib needs Ray RLlib, which is not installed: pip install 'ray[rllib]' torch"
+    ) from e
+
+__all__ = [
+    "ENV_NAME",
+    "SEED_STRIDE",
+    "FloatPixels",
+    "ReturnScaledPPOLearner",
+    "ReturnScaling",
+    "check_env_config",
+    "env_creator",
+    "register",
+    "runner_seeds",
+]
+
+#: The name this module registers with RLlib (the same as Gymnasium's id).
+ENV_NAME = "ChopperScape-v0"
+#: The seed of a sub-env is its runner's (or its own) RLlib seed times this, plus its index (or its runner's).
+SEED_STRIDE = 2**20
+
+#: `env_config` keys that only the native batch uses; the Python sub-envs ignore them.
+VECTOR_ONLY = ("num_threads",)
+
+
+def env_creator(config: Mapping[str, Any]) -> gym.Env | gym.vector.VectorEnv:
+    """Builds what RLlib asks for: a native `VectorEnv` when `config` holds `num_envs` (RLlib's
+    `vector_entry_point` mode), else one `ChopperScape-v0` (a sub-env of RLlib's Python vector).
+
+    `config` is the `env_config` of the algorithm (RLlib's `EnvContext`): every option of `ChopperScapeEnv`,
+    plus `max_episode_steps` (default 10000, as `gymnasium.make`) and, for the native batch, `num_threads`.
+    An unknown option or a bad value raises `ValueError` naming it. Lists (what JSON and YAML configs hold) are
+    taken as tuples: `"obs_size": [84, 84]` is `(84, 84)`.
+    """
+    options: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(config).items()}
+    num_envs: Any = options.pop("num_envs", None)
+    for key in ("autoreset_mode", "copy"):
+        if key in options:
+            raise ValueError(
+                f"option `{key}` cannot be set through RLlib's env_config: RLlib needs autoreset_mode=NEXT_STEP and "
+                "copy=True (it keeps the observation arrays it is given)"
+            )
+    if num_envs is None:
+        worker_index = int(getattr(config, "worker_index", 0) or 0)
+        for key in VECTOR_ONLY:
+            options.pop(key, None)
+        return RunnerSeededEnv(gym.make(ENV_NAME, **options), worker_index)
+    if "num_threads" not in options:
+        options["num_threads"] = _runner_threads(int(num_envs))
+    env = VectorEnv(num_envs, autoreset_mode=AutoresetMode.NEXT_STEP, copy=True, **options)
+    if env.num_envs >= SEED_STRIDE:
+        raise ValueError(f"invalid value {num_envs} for `num_envs_per_env_runner`: allowed 1..{SEED_STRIDE - 1}")
+    return RunnerSeededVectorEnv(env)
+
+
+def check_env_config(env_config: Mapping[str, Any]) -> None:
+    """Builds (and drops) one env from `env_config`, so that a bad option raises its `ValueError` here, in the
+    driver: raised in a remote env runner, RLlib 2.60 logs it but then fails with an unrelated `IndexError`."""
+    env = env_creator({**env_config, "num_envs": 1})
+    env.close()
+
+
+def register(name: str = ENV_NAME) -> str:
+    """Registers `env_creator` with RLlib under `name` (done on import for `"ChopperScape-v0"`); returns `name`."""
+    register_env(name, env_creator)
+    return name
+
+
+def runner_seeds(env_runner: Any) -> list[int | None]:
+    """The core seeds the sub-envs of an RLlib env runner were last reset with (`None` for an env reset without
+    a seed, or never reset). For `algo.env_runner_group.foreach_env_runner(runner_seeds)`."""
+    env = getattr(env_runner, "env", None)
+    if env is None:
+        return []
+    vector = _find(env, RunnerSeededVectorEnv)
+    if vector is not None:
+        return list(vector.reset_seeds) if vector.reset_seeds is not None else [None] * vector.num_envs
+    singles = getattr(_find(env, gym.vector.SyncVectorEnv) or env, "envs", None)
+    if singles is not None:
+        return [getattr(_find(e, RunnerSeededEnv), "reset_seed", None) for e in singles]
+    # AsyncVectorEnv: the sub-envs live in other processes.
+    return list(env.get_attr("reset_seed"))
+
+
+class RunnerSeededVectorEnv(gym.vector.VectorWrapper):
+    """The native batch of one RLlib env runner: `reset(seed=s)` seeds sub-env `i` with `s * SEED_STRIDE + i`."""
+
+    def __init__(self, env: gym.vector.VectorEnv):
+        super().__init__(env)
+        #: The seeds of the last seeded reset, one per sub-env (`None` before one).
+        self.reset_seeds: list[int] | None = None
+
+    def reset(
+        self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [int(seed) * SEED_STRIDE + i for i in range(self.num_envs)]
+            self.reset_seeds = seeds
+            return self.env.reset(seed=seeds, options=options)  # type: ignore[arg-type]  # per-env seeds
+        return self.env.reset(seed=seed, options=options)  # type: ignore[arg-type]
+
+
+class RunnerSeededEnv(gym.Wrapper):
+    """A Python sub-env of RLlib runner `worker_index`: `reset(seed=x)` seeds the game with
+    `x * SEED_STRIDE + worker_index`."""
+
+    def __init__(self, env: gym.Env, worker_index: int):
+        if not 0 <= worker_index < SEED_STRIDE:
+            raise ValueError(f"invalid env runner index {worker_index}: allowed 0..{SEED_STRIDE - 1}")
+        super().__init__(env)
+        self.worker_index = worker_index
+        #: The seed of the last seeded reset (`None` before one).
+        self.reset_seed: int | None = None
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        if seed is not None:
+            seed = int(seed) * SEED_STRIDE + self.worker_index
+            self.reset_seed = seed
+        return self.env.reset(seed=seed, options=options)
+
+
+class FloatPixels(SingleAgentObservationPreprocessor):
+    """Pixel observations (`rgb`, `grayscale`, stacked or not: `uint8`) as `float32` in [0, 1], with a channel axis
+    for plain grayscale: what RLlib's default CNN takes (it neither casts `uint8` nor reads 2-D boxes). Use it as
+    `config.env_runners(env_to_module_connector=lambda env, spaces, device: FloatPixels())`."""
+
+    def recompute_output_observation_space(self, input_observation_space, input_action_space):
+        shape = tuple(input_observation_space.shape)
+        return gym.spaces.Box(0.0, 1.0, shape + (1,) if len(shape) == 2 else shape, np.float32)
+
+    def preprocess(self, observation, episode):
+        obs = np.asarray(observation)
+        obs = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs.astype(np.float32, copy=False)
+        return obs[..., None] if obs.ndim == 2 else obs
+
+
+class ReturnScaling(ConnectorV2):
+    """A learner connector that divides rewards by the running standard deviation of the discounted return, before
+    GAE: what the single-machine recipe (:mod:`chopperscape.learn.train`), Gymnasium's `NormalizeReward` and SB3's
+    `VecNormalize` do, and what RLlib's new API stack lacks. The statistics are Gymnasium's `RunningMeanStd`,
+    updated from each batch's moments, and travel with the learner's state (checkpoints). The episode returns the
+    env runners report stay the game's own: only what the learner sees is scaled.
+
+    A batch whose rows are not one per episode step (padded for a recurrent module) is left as it is."""
+
+    def __init__(self, input_observation_space: Any = None, input_action_space: Any = None, *, gamma: float = 0.99,
+                 **kwargs: Any) -> None:
+        super().__init__(input_observation_space, input_action_space, **kwargs)
+        self.gamma = float(gamma)
+        self.rms = RunningMeanStd(shape=())
+
+    def __call__(self, *, rl_module: Any, batch: dict[str, Any], episodes: Any, **kwargs: Any) -> Any:
+        lens = [len(e) for e in self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False)]
+        for module_batch in batch.values():
+            rewards = module_batch[Columns.REWARDS]
+            r = rewards.detach().cpu().numpy() if hasattr(rewards, "detach") else np.asarray(rewards)
+            r = r.astype(np.float64)
+            if r.shape[0] != sum(lens):
+                continue
+            self.rms.update(discounted_returns(r, lens, self.gamma))
+            module_batch[Columns.REWARDS] = rewards * (1.0 / np.sqrt(self.rms.var + 1e-8))
+        return batch
+
+    def get_state(self, components: Any = None, *, not_components: Any = None, **kwargs: Any) -> dict[str, float]:
+        return {"mean": float(self.rms.mean), "var": float(self.rms.var), "count": float(self.rms.count)}
+
+    def set_state(self, state: dict[str, float]) -> None:
+        self.rms.mean, self.rms.var, self.rms.count = state["mean"], state["var"], state["count"]
+
+
+def discounted_returns(rewards: np.ndarray, lengths: list[int], gamma: float) -> np.ndarray:
+    """The discounted return accumulated forward within each episode chunk: `rewards` holds the chunks one after
+    another, `lengths` their lengths (the quantity whose spread scales the rewards, as in `NormalizeReward`).
+
+    >>> discounted_returns(np.array([1.0, 1.0, 1.0, 2.0]), [3, 1], 0.5).tolist()
+    [1.0, 1.5, 1.75, 2.0]
+    """
+    out, start = np.empty_like(rewards, dtype=np.float64), 0
+    for n in lengths:
+        acc = 0.0
+        for t in range(start, start + n):
+            acc = acc * gamma + rewards[t]
+            out[t] = acc
+        start += n
+    return out
+
+
+class ReturnScaledPPOLearner(PPOTorchLearner):
+    """RLlib's PPO learner with :class:`ReturnScaling` before GAE, at the config's `gamma`:
+    `PPOConfig().learners(learner_class=ReturnScaledPPOLearner)`."""
+
+    def build(self) -> None:
+        super().build()
+        if self._learner_connector is not None:
+            self._learner_connector.insert_before(GeneralAdvantageEstimation, ReturnScaling(gamma=self.config.gamma))
+
+
+def _runner_threads(num_envs: int) -> int:
+    """Threads for a runner's batch: the CPUs Ray gave the runner (`OMP_NUM_THREADS`, set by Ray to the actor's
+    `num_cpus`), else the CPUs this process may use, and at most one per 64 envs. Unlike `VectorEnv`'s default
+    (one thread, since a learner usually shares the cores), a runner's CPUs are reserved for it by Ray."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cpus = os.cpu_count() or 1
+    try:
+        cpus = min(cpus, int(os.environ.get("OMP_NUM_THREADS", "")))
+    except ValueError:
+        pass
+    return max(1, min(cpus, num_envs // 64))
+
+
+def _find(env: Any, kind: type) -> Any:
+    """The first wrapper or env of type `kind` down `env`'s `.env` chain, or `None`."""
+    while env is not None:
+        if isinstance(env, kind):
+            return env
+        env = getattr(env, "env", None)
+    return None
+
+
+register()

@@ -1,0 +1,242 @@
+"""Exports a trained policy to ONNX, for the `chopperscape` command line, the Rust crate `chopperscape-policy`
+and any ONNX runtime.
+
+    python -m chopperscape.learn.export runs/ppo/model.pt --out ppo.onnx
+
+`MODEL` is a file written by ``python -m chopperscape.learn.train`` (``model.pt``, features MLP or pixel CNN), read with
+``torch.load(weights_only=True)``: a file that holds anything but tensors and plain data is refused, so exporting
+never runs code from it.
+
+The exported graph maps a batch of raw observations, exactly as the env gives them (``float32`` features,
+``uint8`` frames ``(N, H, W)`` or ``(N, H, W, k)``), to the logits of the five actions: the observation
+normalisation the model was trained with (mean and variance, ε = 1e-8, clipped to ±10, as ``train.ObsNormalizer``)
+is part of the graph. Its input is ``obs`` (batch axis ``batch``) and its output ``logits``. The greedy action is
+the argmax of the logits.
+
+The file's ``metadata_props`` say what the policy takes (the Rust loader refuses a file without them):
+
+    format            chopperscape-policy/1
+    obs_type          features | grayscale | rgb | rgb_float
+    obs_shape         one observation's shape, JSON ([46], [84, 84, 4])
+    env_options       the env options it was trained with, JSON ({"frame_skip": 4, "obs_size": [84, 84], ...})
+    features_version  the features layout it learned (chopperscape.FEATURES_VERSION)
+    pixels_version    the pixel layout it learned (chopperscape.PIXELS_VERSION)
+    source_sha256     the SHA-256 of MODEL
+
+After writing, the export is checked: its logits must equal torch's within 1e-5 on 1,000 observations recorded by
+playing the env with the policy (with ``onnxruntime`` when it is installed; otherwise the check is skipped and
+says so: ``pip install onnxruntime``). Exit status 0, or 2 with one line on standard error (a missing file, a
+file that is not a recipe model, an existing ``--out`` without ``--force``), 1 if the check fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._cli import print_line
+
+#: The format written into `metadata_props["format"]` (the Rust crate reads this one).
+FORMAT = "chopperscape-policy/1"
+#: Observations the check compares logits on, and the largest difference allowed.
+CHECK_OBSERVATIONS = 1000
+CHECK_TOLERANCE = 1e-5
+#: ONNX operator set of the export: within what tract is tested against (9 to 18).
+OPSET = 17
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def load(path: Path):
+    """`(payload, agent, norm, env_options, env_shape)` of a recipe model; `ValueError` with one line for a
+    missing file, one that is not a recipe model, or one that holds more than tensors and plain data."""
+    from .evaluate import observation_shape
+    from .model import from_payload, read_checkpoint
+
+    what = f"model file {str(path)!r}"
+    if not path.is_file():
+        raise ValueError(f"{what} does not exist (give a model.pt from python -m chopperscape.learn.train)")
+    payload = read_checkpoint(path, what)
+    agent, model_shape, norm, recipe = from_payload(payload, what)
+    # The env's own observation (the Rust env has no `keep_dim`: a grayscale frame without a channel axis).
+    options = {k: v for k, v in recipe["env_options"].items() if k != "keep_dim"}
+    env_shape = observation_shape({"obs_type": recipe["obs_type"], **options})
+    if int(np.prod(env_shape)) != int(np.prod(model_shape)):
+        raise ValueError(f"{what} takes observations of shape {model_shape}, but its env options give {env_shape}")
+    return payload, agent, norm, options, env_shape
+
+
+def _policy_module(agent, norm, model_shape: tuple[int, ...], env_shape: tuple[int, ...]):
+    """The torch module that is exported: the env's raw observation batch to logits."""
+    import torch
+    from torch import nn
+
+    class Policy(nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            self.actor = agent.actor
+            self.reshape = tuple(model_shape) != tuple(env_shape)
+            self.normalise = norm.enabled
+            if norm.enabled:
+                std = np.sqrt(norm.rms.var + 1e-8)
+                self.register_buffer("mean", torch.as_tensor(norm.rms.mean, dtype=torch.float32))
+                self.register_buffer("inv_std", torch.as_tensor(1.0 / std, dtype=torch.float32))
+
+        def forward(self, obs: torch.Tensor) -> torch.Tensor:
+            x = obs.reshape(-1, *model_shape) if self.reshape else obs
+            if self.normalise:
+                x = torch.clamp((x.float() - self.mean) * self.inv_std, -10.0, 10.0)
+            return self.actor(x)
+
+    return Policy().eval()
+
+
+def record_observations(payload: dict[str, Any], agent, norm, options: dict[str, Any], n: int = CHECK_OBSERVATIONS,
+                        seed: int = 0) -> np.ndarray:
+    """`n` observations met by playing the env greedily with the policy (8 envs, seeds `seed + i`, autoreset)."""
+    import torch
+
+    from ..vector import VectorEnv
+
+    envs = VectorEnv(8, num_threads=1, obs_type=payload["recipe"]["obs_type"], **options)
+    try:
+        obs, _ = envs.reset(seed=seed)
+        seen = [obs.copy()]
+        while sum(len(o) for o in seen) < n:
+            with torch.no_grad():
+                action = agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload))))
+            obs, *_ = envs.step(action.argmax(-1).numpy().astype(np.int64))
+            seen.append(obs.copy())
+    finally:
+        envs.close()
+    return np.concatenate(seen)[:n]
+
+
+def payload_shape(payload: dict[str, Any]) -> tuple[int, ...]:
+    """One observation's shape as the model takes it."""
+    return tuple(payload.get("obs_shape") or (payload["obs_dim"],))
+
+
+def export(model: Path, out: Path, force: bool = False, check: bool = True) -> dict[str, Any]:
+    """Writes the ONNX export of `model` to `out` (atomically: a temporary file beside it, renamed), then checks
+    it (see the module docs). Returns what the command line prints. `ValueError` for a bad model or `out`;
+    `RuntimeError` when the check fails (the file is removed)."""
+    import onnx
+    import torch
+
+    out_dir = out.parent if str(out.parent) else Path(".")
+    if not out_dir.is_dir():
+        raise ValueError(f"--out {str(out)!r}: the folder {str(out_dir)!r} does not exist")
+    if os.path.lexists(out) and not force:
+        raise ValueError(f"--out {str(out)!r} exists: pass --force to replace it")
+    payload, agent, norm, options, env_shape = load(model)
+    obs_type = payload["recipe"]["obs_type"]
+    module = _policy_module(agent, norm, payload_shape(payload), env_shape)
+    # The env's element type: uint8 frames (rgb, grayscale), float32 otherwise (features, rgb_float).
+    dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
+    example = torch.zeros((2, *env_shape), dtype=dtype)
+    pixels = obs_type != "features"
+    from .. import FEATURES_VERSION, PIXELS_VERSION
+
+    versions = {
+        "features_version": int(payload.get("features_version", 2 if not pixels else FEATURES_VERSION)),
+        "pixels_version": int(payload.get("pixels_version", 1 if pixels else PIXELS_VERSION)),
+    }
+    metadata = {
+        "format": FORMAT,
+        "obs_type": obs_type,
+        "obs_shape": json.dumps(list(env_shape)),
+        "env_options": json.dumps(options, sort_keys=True),
+        **{k: str(v) for k, v in versions.items()},
+        "source_sha256": _sha256(model),
+    }
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.part")
+    try:
+        # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
+        # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            torch.onnx.export(
+                module, (example,), str(tmp), input_names=["obs"], output_names=["logits"],
+                dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}}, opset_version=OPSET, dynamo=False,
+            )
+        graph = onnx.load(str(tmp))
+        del graph.metadata_props[:]
+        for key, value in metadata.items():
+            graph.metadata_props.add(key=key, value=value)
+        graph.producer_name = "chopperscape.learn.export"
+        onnx.checker.check_model(graph)
+        onnx.save(graph, str(tmp))
+        result: dict[str, Any] = {"model": str(model), "out": str(out), "obs_type": obs_type,
+                                  "obs_shape": list(env_shape), "bytes": tmp.stat().st_size}
+        if check:
+            result.update(check_export(tmp, payload, agent, norm, options))
+        os.replace(tmp, out)
+    finally:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)
+    return result
+
+
+def check_export(path: Path, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:
+    """Compares the export's logits with torch's on `CHECK_OBSERVATIONS` recorded observations; `RuntimeError`
+    when they differ by more than `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime."""
+    try:
+        import onnxruntime
+    except ImportError:
+        return {"checked": False, "why": "onnxruntime is not installed (pip install onnxruntime)"}
+    import torch
+
+    obs = record_observations(payload, agent, norm, options)
+    with torch.no_grad():
+        expected = agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload)))).numpy()
+    session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    got = session.run(["logits"], {"obs": obs})[0]
+    diff = float(np.max(np.abs(got - expected)))
+    if not diff <= CHECK_TOLERANCE:
+        raise RuntimeError(f"the export's logits differ from torch's by {diff:.3g} (allowed {CHECK_TOLERANCE})")
+    return {"checked": True, "observations": len(obs), "max_abs_diff": diff}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m chopperscape.learn.export", description=__doc__.splitlines()[0])
+    p.add_argument("model", help="model.pt from python -m chopperscape.learn.train")
+    p.add_argument("--out", required=True, help="the ONNX file to write (NAME.onnx)")
+    p.add_argument("--force", action="store_true", help="replace --out if it exists")
+    p.add_argument("--no-check", action="store_true", help="skip comparing the export's logits with torch's")
+    a = p.parse_args(argv)
+    try:
+        import onnx  # noqa: F401
+        import torch
+
+        torch.set_num_threads(1)
+    except ImportError as err:
+        print(f"error: exporting needs torch and onnx: pip install torch onnx ({err})", file=sys.stderr)
+        return 2
+    try:
+        result = export(Path(a.model), Path(a.out), a.force, check=not a.no_check)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except RuntimeError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+    return print_line(json.dumps(result))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

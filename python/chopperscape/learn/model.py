@@ -1,0 +1,319 @@
+"""The recipe's model and its file: the networks (an MLP on features, CNNs on frames), the observation normaliser,
+and the checkpoint format ``chopperscape-ppo/1`` that :mod:`.train` writes and :mod:`.evaluate` and :mod:`.export`
+read.
+
+The file holds tensors and plain data only, so it is read with ``torch.load(weights_only=True)``: a crafted file
+cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it field by field.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any, NamedTuple, TypeVar
+
+import numpy as np
+from gymnasium.wrappers.utils import RunningMeanStd as _GymRunningMeanStd
+
+try:
+    import torch
+    from torch import nn
+except ImportError as err:  # pragma: no cover - exercised only without torch
+    raise ImportError(
+        "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
+    ) from err
+
+from .. import FEATURES_VERSION, PIXELS_VERSION, _signals
+from .recipe import Recipe, network_of
+
+#: The checkpoint format this module writes and reads.
+FORMAT = "chopperscape-ppo/1"
+
+class RunningMeanStd(_GymRunningMeanStd):
+    """Gymnasium's running mean and variance (Chan et al.'s parallel update, the one its and SB3's normalisers keep),
+    with its state as plain data for checkpoints."""
+
+    def __init__(self, shape: tuple[int, ...] = ()):
+        super().__init__(shape=shape)
+
+    def state(self) -> dict[str, Any]:
+        return {"mean": self.mean.tolist(), "var": self.var.tolist(), "count": float(self.count)}
+
+    @classmethod
+    def from_state(cls, s: dict[str, Any]) -> RunningMeanStd:
+        r = cls()
+        r.mean, r.var, r.count = np.asarray(s["mean"]), np.asarray(s["var"]), float(s["count"])
+        return r
+
+
+class ObsNormalizer:
+    """Standardises observations with running statistics, clipped to ±10 (frozen at evaluation)."""
+
+    def __init__(self, shape: tuple[int, ...], enabled: bool = True):
+        self.rms = RunningMeanStd(shape)
+        self.enabled = enabled
+
+    def __call__(self, obs: np.ndarray, update: bool = False) -> np.ndarray:
+        obs = obs.astype(np.float32, copy=False)
+        if not self.enabled:
+            return obs
+        if update:
+            self.rms.update(obs)
+        out = (obs - self.rms.mean) / np.sqrt(self.rms.var + 1e-8)
+        return np.clip(out, -10.0, 10.0).astype(np.float32)
+
+
+#: A layer that `_layer` initialises.
+_L = TypeVar("_L", nn.Linear, nn.Conv2d)
+
+
+def _layer(layer: _L, std: float = math.sqrt(2)) -> _L:
+    """Orthogonal weights and zero biases, as in CleanRL's PPO."""
+    nn.init.orthogonal_(layer.weight, std)
+    if layer.bias is not None:
+        nn.init.constant_(layer.bias, 0.0)
+    return layer
+
+
+class ActorCritic(nn.Module):
+    """What PPO needs of a network: `actor(obs)` gives the action logits and `critic(obs)` the value."""
+
+    actor: nn.Module
+    critic: nn.Module
+
+    def value(self, x: torch.Tensor) -> torch.Tensor:
+        return self.critic(x).squeeze(-1)
+
+    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
+        """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
+        logits = self.actor(x)
+        dist = torch.distributions.Categorical(logits=logits)
+        if action is None:
+            action = dist.sample()
+        return action, dist.log_prob(action), dist.entropy(), self.value(x)
+
+
+class Agent(ActorCritic):
+    """Separate actor and critic MLPs (tanh), orthogonal init as in CleanRL's PPO."""
+
+    def __init__(self, obs_dim: int, num_actions: int, hidden: int):
+        super().__init__()
+        self.critic = nn.Sequential(
+            _layer(nn.Linear(obs_dim, hidden)), nn.Tanh(), _layer(nn.Linear(hidden, hidden)), nn.Tanh(),
+            _layer(nn.Linear(hidden, 1), 1.0),
+        )
+        self.actor = nn.Sequential(
+            _layer(nn.Linear(obs_dim, hidden)), nn.Tanh(), _layer(nn.Linear(hidden, hidden)), nn.Tanh(),
+            _layer(nn.Linear(hidden, num_actions), 0.01),
+        )
+
+
+class Frames(nn.Module):
+    """The env's grayscale observation as the convolutions want it: ``(N, H, W)`` or ``(N, H, W, k)`` (k stacked
+    frames, uint8 or float in 0..255) to ``(N, k, H, W)`` floats in [0, 1]. Part of the network, so that a
+    saved or exported policy takes the env's observation unchanged."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        x = x.float() * (1.0 / 255.0)
+        return x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
+
+
+#: CNN layouts: (channels, kernel, stride) per convolution, then the width of the dense layer. "small" on frames
+#: under 64 pixels starts with a 4×4 stride-2 convolution, so that its second one sees the same 9×9 map at 42×42
+#: as at 84×84.
+CNNS = {
+    "nature": ([(32, 8, 4), (64, 4, 2), (64, 3, 1)], 512),
+    "small": ([(16, 8, 4), (32, 4, 2)], 256),
+    "small-42": ([(16, 4, 2), (32, 4, 2)], 256),
+}
+
+
+class CnnAgent(ActorCritic):
+    """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy).
+    `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
+
+    def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str):
+        super().__init__()
+        h, w = obs_shape[:2]
+        stack = obs_shape[2] if len(obs_shape) == 3 else 1
+        name = "small-42" if network == "small" and min(h, w) < 64 else network
+        convs, width = CNNS[name]
+        layers: list[nn.Module] = [Frames()]
+        channels = stack
+        for out, kernel, stride in convs:
+            layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
+            channels = out
+        layers.append(nn.Flatten())
+        size = [h, w]
+        for _, kernel, stride in convs:
+            size = [(d - kernel) // stride + 1 for d in size]
+            if min(size) < 1:
+                raise ValueError(
+                    f"frames of {h}×{w} are too small for the {network!r} network (at least 36×36 for 'nature', "
+                    "16×16 for 'small')"
+                )
+        flat = channels * size[0] * size[1]
+        trunk = nn.Sequential(*layers, _layer(nn.Linear(flat, width)), nn.ReLU())
+        self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
+        self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
+
+
+def build_agent(
+    network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128
+) -> ActorCritic:
+    """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's)."""
+    if network == "mlp":
+        if len(obs_shape) != 1:
+            raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
+        return Agent(int(obs_shape[0]), num_actions, hidden)
+    if network not in ("small", "nature"):
+        raise ValueError(f"invalid network {network!r}: allowed 'auto', 'mlp', 'small', 'nature'")
+    if len(obs_shape) not in (2, 3):
+        raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
+    return CnnAgent(tuple(obs_shape), num_actions, network)
+
+
+def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCritic:
+    """Rebuilds the agent a checkpoint (see :func:`save`) holds, with its weights, in eval mode. `ValueError`
+    naming the first field that is missing or of the wrong kind, or a layout version other than this package's."""
+
+    def bad(field: str, expected: str) -> ValueError:
+        return ValueError(f"{what} is not a usable chopperscape.learn.train model: `{field}` {expected}")
+
+    if not isinstance(payload, dict) or payload.get("format") != FORMAT:
+        raise ValueError(f"{what} is not a chopperscape.learn.train model (format {FORMAT})")
+    recipe = payload.get("recipe")
+    if not isinstance(recipe, dict) or not isinstance(recipe.get("env_options", {}), dict):
+        raise bad("recipe", "must be the recipe's settings (a dict with env_options)")
+    obs_dim, hidden = payload.get("obs_dim"), recipe.get("hidden")
+    for field, value in (("obs_dim", obs_dim), ("recipe.hidden", hidden), ("num_actions", payload.get("num_actions"))):
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 1 << 24:
+            raise bad(field, "must be a positive integer")
+    if payload["num_actions"] != 5 or not isinstance(recipe.get("obs_type"), str):
+        raise bad("num_actions/recipe.obs_type", "must be 5 actions and an observation type")
+    shape = payload.get("obs_shape", [obs_dim])
+    if (
+        not isinstance(shape, list) or not 1 <= len(shape) <= 3
+        or not all(isinstance(d, int) and not isinstance(d, bool) and 1 <= d <= 4096 for d in shape)
+        or math.prod(shape) != obs_dim
+    ):
+        raise bad("obs_shape", f"must be 1 to 3 sizes in 1..=4096 whose product is obs_dim ({obs_dim})")
+    pixels = recipe["obs_type"] != "features"
+    learned = payload.get("pixels_version" if pixels else "features_version", 1 if pixels else 2)
+    current = PIXELS_VERSION if pixels else FEATURES_VERSION
+    if learned != current:
+        kind = "pixel" if pixels else "features"
+        raise ValueError(
+            f"{what}: the model learned {kind} layout v{learned}, and this chopperscape draws v{current}: retrain "
+            "it, or use the chopperscape version it was trained with"
+        )
+    network = network_of(recipe)
+    try:
+        agent = build_agent(network, tuple(shape), 5, int(hidden or 0))
+    except ValueError as e:
+        raise bad("recipe.network", str(e)) from None
+    for part in ("actor", "critic"):
+        state = payload.get(part)
+        if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
+            raise bad(part, "must be a dict of tensors")
+        try:
+            getattr(agent, part).load_state_dict(state)
+        except RuntimeError as e:
+            raise bad(part, f"does not fit the {network} network on observations of shape {tuple(shape)}: "
+                            f"{str(e).splitlines()[0]}") from None
+    return agent.eval()
+
+
+def _plain(value: Any) -> Any:
+    """`value` as plain data (dicts, lists, str, int, float, bool, None), what `weights_only` loading reads."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def save(
+    path: Path, agent: ActorCritic, obs_norm: ObsNormalizer, recipe: Recipe, obs_shape: tuple[int, ...], env_steps: int
+) -> None:
+    """Writes the policy atomically (temp file + rename): a crash or a Ctrl-C never leaves a half-written model,
+    nor the temporary file. The payload is tensors and plain data only (`torch.load(weights_only=True)`).
+
+    The payload (format ``chopperscape-ppo/1``): ``recipe`` (the :class:`Recipe` as a dict, env options included),
+    ``obs_shape`` (one env's observation), ``obs_dim`` (its size), ``num_actions``, ``obs_rms`` (the observation
+    statistics, or None), ``env_steps``, and the ``actor`` and ``critic`` state dicts (a CNN's shared trunk is in
+    both), and the layout versions of the observations it learned from (``features_version``, ``pixels_version``).
+    Models from before the pixel recipe have no ``obs_shape``, no versions and no ``recipe["network"]`` (an MLP on
+    features v2)."""
+    payload = {
+        "format": FORMAT,
+        "recipe": _plain(asdict(recipe)),
+        "obs_shape": list(obs_shape),
+        "obs_dim": int(np.prod(obs_shape)),
+        "num_actions": 5,
+        "obs_rms": obs_norm.rms.state() if obs_norm.enabled else None,
+        "env_steps": int(env_steps),
+        # The observation layouts the policy learned: a later layout is a different input.
+        "features_version": FEATURES_VERSION,
+        "pixels_version": PIXELS_VERSION,
+        # Not cloned: a CNN's trunk, in both state dicts, then shares its storage and is written once.
+        "actor": {k: v.detach().cpu() for k, v in agent.actor.state_dict().items()},
+        "critic": {k: v.detach().cpu() for k, v in agent.critic.state_dict().items()},
+    }
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
+    with _signals.deferred(f"the model is saved in {path}"):
+        try:
+            torch.save(payload, tmp)
+            os.replace(tmp, path)
+        finally:
+            if os.path.lexists(tmp):
+                os.unlink(tmp)
+
+
+def read_checkpoint(path: Path, what: str) -> Any:
+    """The payload of a recipe model file, read with `torch.load(weights_only=True)` (tensors and plain data only: a
+    crafted file cannot run code); `ValueError` in one line when the file is damaged or holds more."""
+    try:
+        return torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
+        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        raise ValueError(f"{what} is not a chopperscape.learn.train model (it holds more than tensors and plain data, "
+                         f"or is damaged): {first}") from None
+
+
+class Model(NamedTuple):
+    """A loaded model: the agent (eval mode), one env's observation shape, the frozen normaliser, the recipe."""
+
+    agent: ActorCritic
+    obs_shape: tuple[int, ...]
+    norm: ObsNormalizer
+    recipe: dict[str, Any]
+
+
+def from_payload(payload: Any, what: str = "the checkpoint") -> Model:
+    """The :class:`Model` a loaded payload holds; `ValueError` naming the first field that is missing or of the
+    wrong kind (:func:`agent_from_checkpoint`'s checks, then the observation statistics')."""
+    agent = agent_from_checkpoint(payload, what)
+    recipe, shape = payload["recipe"], tuple(payload.get("obs_shape") or (payload["obs_dim"],))
+    rms = payload.get("obs_rms")
+    norm = ObsNormalizer(shape, rms is not None)
+    if rms is not None:
+        try:
+            norm.rms = RunningMeanStd.from_state(rms)
+            ok = norm.rms.mean.shape == shape and norm.rms.var.shape == shape
+        except (KeyError, TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"{what} is not a usable chopperscape.learn.train model: `obs_rms` must hold a mean and a "
+                             f"variance of shape {shape}")
+    return Model(agent, shape, norm, recipe)
+
+
+def load(path: Path, what: str | None = None) -> Model:
+    """Reads and checks a model file (:func:`read_checkpoint`, then :func:`from_payload`)."""
+    what = what or f"model file {str(path)!r}"
+    return from_payload(read_checkpoint(Path(path), what), what)

@@ -1,0 +1,184 @@
+"""The PPO recipe's settings: :class:`Recipe` (the hyperparameters the README's figures come from), the presets
+``--preset`` names, and the checks that refuse a setting before anything is written.
+
+Plain data, no torch at import: :mod:`chopperscape.learn.seeds` and the command lines read the defaults without
+loading a network library (only :func:`check_device` imports torch, to ask it which devices exist).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .._checks import check_bool, number_in, pilot_seed, positive_int
+from .._cli import ENV_OPTIONS
+
+#: The recipe's settings that the command line exposes as flags (``--num-envs`` …).
+RECIPE_FLAGS = (
+    "obs_type", "num_envs", "num_steps", "gamma", "gae_lambda", "learning_rate", "update_epochs", "num_minibatches",
+    "clip_coef", "ent_coef", "vf_coef", "max_grad_norm", "hidden", "seed", "torch_threads", "env_threads", "network",
+    "device",
+)
+
+#: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
+#: the command line win. ``pixels`` learns from 84×84 grayscale frames, 4 stacked, each action held for 4 frames
+#: (env steps then count decisions: a decision is 4 frames); γ = 0.996 per decision is the features recipe's
+#: 0.999 per frame (0.999⁴), the same horizon in game time. See docs/learning.md for how it was chosen.
+PRESETS: dict[str, dict[str, Any]] = {
+    "features": {},
+    "pixels": {
+        "obs_type": "grayscale",
+        "env_options": {"obs_size": [84, 84], "frame_stack": 4, "frame_skip": 4},
+        "network": "small",
+        "num_envs": 32,
+        "num_steps": 128,
+        "num_minibatches": 4,
+        "gamma": 0.996,
+        "learning_rate": 2.5e-4,
+    },
+}
+#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 8× the envs, so that each
+#: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
+PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
+
+#: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core.
+DEFAULT_STEPS = 15_000_000
+
+
+@dataclass
+class Recipe:
+    """Hyperparameters of the recipe; the defaults are the ones the README's figures come from."""
+
+    obs_type: str = "features"
+    env_options: dict[str, Any] = field(default_factory=dict)
+    num_envs: int = 64
+    num_steps: int = 256
+    gamma: float = 0.999
+    gae_lambda: float = 0.95
+    learning_rate: float = 3e-4
+    anneal_lr: bool = True
+    update_epochs: int = 4
+    num_minibatches: int = 8
+    clip_coef: float = 0.2
+    ent_coef: float = 0.01
+    vf_coef: float = 0.5
+    max_grad_norm: float = 0.5
+    hidden: int = 128
+    #: The network: "mlp" (features) or a CNN for pixel observations, "small" (Mnih et al. 2013's two
+    #: convolutions) or "nature" (Mnih et al. 2015's three); "auto" picks "mlp" or "small" by obs_type.
+    network: str = "auto"
+    #: Where the network runs: "cpu", or "cuda" where torch sees a GPU (see docs/learning.md for throughput).
+    device: str = "cpu"
+    norm_obs: bool = True
+    norm_reward: bool = True
+    seed: int = 0
+    torch_threads: int = 1
+    env_threads: int = 1
+    #: The step budget: the learning rate anneals linearly to 5 % over it.
+    total_steps: int = DEFAULT_STEPS
+
+
+#: `--option` names the recipe sets itself, and what to use instead.
+RESERVED_OPTIONS = {
+    "obs_type": "the observation is the recipe's --obs-type",
+    "num_threads": "the env's threads are the recipe's --env-threads",
+    "copy": "the recipe reads each step's arrays itself",
+    "autoreset_mode": "the recipe steps the batch in NEXT_STEP mode and masks the reset steps",
+    "render_mode": "the recipe draws nothing",
+}
+#: The files of a run in its folder.
+RUN_FILES = ("model.pt", "progress.csv", "recipe.json")
+#: The networks `Recipe.network` names.
+NETWORKS = ("auto", "mlp", "small", "nature")
+
+
+def check_device(device: Any) -> None:
+    """`ValueError` unless `device` names a torch device that this process can use ('cpu', 'cuda', 'cuda:1', 'mps')."""
+    import torch
+
+    allowed = "allowed a torch device such as 'cpu', 'cuda', 'cuda:0'"
+    if not isinstance(device, str) or not device:
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed}")
+    try:
+        d = torch.device(device)
+    except (RuntimeError, ValueError):
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed}") from None
+    if d.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(f"device {device!r}: torch sees no CUDA GPU here (torch.cuda.is_available() is False; "
+                             "a CPU-only torch build, or no driver): use --device cpu")
+        if d.index is not None and d.index >= torch.cuda.device_count():
+            raise ValueError(f"device {device!r}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")
+    elif d.type == "mps" and not torch.backends.mps.is_available():
+        raise ValueError(f"device {device!r}: torch sees no MPS device here: use --device cpu")
+    elif d.type not in ("cpu", "cuda", "mps"):
+        raise ValueError(f"invalid value {device!r} for option `device`: {allowed} (or 'mps')")
+
+
+def check_recipe(recipe: Recipe) -> None:
+    """`ValueError` naming the first setting of `recipe` that is out of range (before anything is written)."""
+    r = recipe
+    for name in ("num_envs", "num_steps", "update_epochs", "num_minibatches", "total_steps"):
+        positive_int(name, getattr(r, name))
+    positive_int("hidden", r.hidden, maximum=1 << 16)
+    positive_int("torch_threads", r.torch_threads, maximum=1024)
+    positive_int("env_threads", r.env_threads, maximum=1024)
+    if r.num_minibatches * 4 > r.num_envs * r.num_steps:
+        raise ValueError(
+            f"invalid value {r.num_minibatches} for option `num_minibatches`: each minibatch needs at least 4 of the "
+            f"num_envs × num_steps = {r.num_envs * r.num_steps} steps of an update (allowed 1..="
+            f"{r.num_envs * r.num_steps // 4})"
+        )
+    number_in("gamma", r.gamma, 0.0, 1.0, low_open=True)
+    number_in("gae_lambda", r.gae_lambda, 0.0, 1.0)
+    number_in("learning_rate", r.learning_rate, 0.0, 1.0, low_open=True)
+    number_in("clip_coef", r.clip_coef, 0.0, 10.0, low_open=True)
+    number_in("ent_coef", r.ent_coef, 0.0, 1000.0)
+    number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
+    number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
+    pilot_seed(r.seed)
+    for name in ("anneal_lr", "norm_obs", "norm_reward"):
+        check_bool(name, getattr(r, name))
+    if not isinstance(r.obs_type, str):
+        raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
+    if r.network not in NETWORKS:
+        raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
+    check_device(r.device)
+    if not isinstance(r.env_options, dict):
+        raise ValueError(f"invalid value {r.env_options!r} for option `env_options`: allowed a dict of env options")
+    for name in r.env_options:
+        if name in RESERVED_OPTIONS:
+            raise ValueError(f"env option `{name}` is not taken: {RESERVED_OPTIONS[name]}")
+        if name not in ENV_OPTIONS:
+            raise ValueError(f"unknown env option `{name}`: allowed {', '.join(ENV_OPTIONS)}")
+
+
+def check_minutes(minutes: float | None) -> None:
+    """`ValueError` unless `minutes` (the wall-clock stop) is None or positive and finite."""
+    if minutes is not None:
+        number_in("minutes", minutes, 0.0, 1e7, low_open=True)
+
+
+def check_run_folder(out: Path, force: bool = False) -> None:
+    """`ValueError` when `out` cannot hold a new run: it is not a folder, or it holds a run (`RUN_FILES`) and not
+    `force`. Nothing is written."""
+    out = Path(out)
+    if os.path.lexists(out) and not out.is_dir():
+        raise ValueError(f"--out {out} is not a folder: give a folder for progress.csv, model.pt and recipe.json")
+    there = [name for name in RUN_FILES if os.path.lexists(out / name)]
+    if there and not force:
+        raise ValueError(
+            f"--out {out} already holds a run ({', '.join(there)}): pass --force to start over in it (its files are "
+            "replaced), or give another folder"
+        )
+
+
+def network_of(recipe: dict[str, Any] | Recipe) -> str:
+    """The network a recipe trains: its `network`, with "auto" resolved by its obs_type."""
+    r = recipe if isinstance(recipe, dict) else asdict(recipe)
+    net = r.get("network", "mlp")
+    if net == "auto":
+        return "mlp" if r["obs_type"] == "features" else "small"
+    return net

@@ -1,0 +1,298 @@
+"""Trains the recipe on several seeds and reports them as the field does: IQM with a bootstrap confidence interval.
+
+    python -m chopperscape.learn.seeds --seeds 0-9 --steps 15000000 --out runs/seeds
+    python -m chopperscape.learn.train --seeds 0-9 --steps 15000000 --out runs/seeds     # the same
+
+Every seed ``K`` is trained into ``OUT/seed-K`` by ``python -m chopperscape.learn.train`` (any other flag, such as
+``--ent-coef 0.02`` or ``--option frame_skip=4``, is passed on to it), ``--jobs`` at a time, then evaluated greedily
+on the same held-out seeds (``--eval-episodes 100`` from ``--eval-seed 1000000``) into ``OUT/seed-K/eval.json``. The
+``random`` and ``heuristic`` pilots are evaluated on those seeds too. A seed whose evaluation is already there with
+the same settings is not run again, so an interrupted runner resumes where it stopped.
+
+It then writes:
+
+- ``OUT/summary.json`` and ``OUT/summary.md``: per-seed held-out mean, spread and end causes; the interquartile mean
+  (IQM) of the per-seed means with its 95 % bootstrap confidence interval, the median, the mean, how many seeds beat
+  the heuristic and the worst seed;
+- ``OUT/curves.png`` (with matplotlib): every seed's training curve, their IQM with a 95 % band, random and heuristic.
+
+The statistics follow Agarwal et al. 2021 ("Deep RL at the edge of the statistical precipice", the ``rliable``
+library): the IQM is the mean of the middle 50 % of runs (``scipy.stats.trim_mean(x, 0.25)``), and its interval is
+the percentile bootstrap over runs. With one task, rliable's stratified bootstrap *is* this plain bootstrap over
+runs; it is written here in numpy (:func:`iqm`, :func:`bootstrap_ci`) rather than pulling in rliable, whose pinned
+``arch`` dependency is heavy, for the 15 lines it would save. The bootstrap's generator is seeded, so a summary is
+reproducible.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import progress
+
+#: Held-out evaluation: 100 episodes from seed 1,000,000 (training seeds are small numbers).
+EVAL_EPISODES, EVAL_SEED = 100, 1_000_000
+#: Bootstrap resamples (rliable's default).
+RESAMPLES = 50_000
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``"0-9"``, ``"0,3,5"`` or ``"1,0,2-9"`` as a list of distinct seeds in the order given (the order they are
+    trained in); `ValueError` naming the item."""
+    seeds: dict[int, None] = {}
+    for item in text.split(","):
+        lo, dash, hi = item.strip().partition("-")
+        try:
+            a = int(lo)
+            b = int(hi) if dash else a
+        except ValueError:
+            raise ValueError(f"--seeds {text!r}: {item!r} is not a seed or a range (e.g. 0-9 or 0,3,5)") from None
+        if a < 0 or b < a or b - a >= 1000:
+            raise ValueError(f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST with at most 1000 seeds")
+        seeds.update(dict.fromkeys(range(a, b + 1)))
+    if len(seeds) > 1000:
+        raise ValueError(f"--seeds {text!r}: at most 1000 seeds")
+    return list(seeds)
+
+
+def iqm(x: np.ndarray, axis: int = -1) -> np.ndarray:
+    """Interquartile mean along `axis`: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``)."""
+    x = np.sort(np.asarray(x, dtype=np.float64), axis=axis)
+    n = x.shape[axis]
+    cut = int(0.25 * n)
+    return np.take(x, np.arange(cut, n - cut), axis=axis).mean(axis=axis)
+
+
+def bootstrap_ci(
+    x: np.ndarray, stat=iqm, resamples: int = RESAMPLES, level: float = 0.95, seed: int = 0
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of `stat` over runs (the last axis of `x` is the runs; earlier axes, such as
+    points of a curve, are resampled together)."""
+    x = np.asarray(x, dtype=np.float64)
+    n = x.shape[-1]
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, n, size=(resamples, n))
+    stats = stat(x[..., idx], axis=-1)  # (..., resamples)
+    lo, hi = np.percentile(stats, [50 * (1 - level), 50 * (1 + level)], axis=-1)
+    return lo, hi
+
+
+def _run(what: str, cmd: list[str], log: Path) -> None:
+    with open(log, "w") as f:
+        done = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
+    if done.returncode != 0:
+        tail = log.read_text(errors="replace").strip().splitlines()[-5:]
+        raise RuntimeError(f"{what} failed (exit {done.returncode}); the end of {log}:\n" + "\n".join(tail))
+
+
+def _evaluate(model: str, out: Path, episodes: int, seed: int, options: list[str], log: Path) -> dict[str, Any]:
+    cmd = [sys.executable, "-m", "chopperscape.learn.evaluate", model, "--episodes", str(episodes), "--seed", str(seed),
+           "--per-episode"]
+    for o in options:
+        cmd += ["--option", o]
+    tmp = out.with_name(f".{out.name}.part")
+    with open(tmp, "w") as f, open(log, "a") as err:
+        done = subprocess.run(cmd, stdout=f, stderr=err)
+    if done.returncode != 0:
+        tmp.unlink(missing_ok=True)
+        raise RuntimeError(f"evaluating {model} failed ({done.returncode}); see {log}")
+    os.replace(tmp, out)
+    return json.loads(out.read_text())
+
+
+def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[str, Any]) -> dict[str, Any]:
+    """Trains and evaluates one seed unless its evaluation with the same settings is already there."""
+    run = a.out / f"seed-{seed}"
+    done = run / "eval.json"
+    if done.is_file():
+        prev = json.loads(done.read_text())
+        if prev.get("runner") == key:
+            return prev
+    run.mkdir(parents=True, exist_ok=True)
+    # --force: what is in the folder is an interrupted run of this seed (a finished one has its eval.json).
+    cmd = [sys.executable, "-m", "chopperscape.learn.train", "--out", str(run), "--seed", str(seed), "--steps",
+           str(a.steps), "--force", *forward]
+    _run(f"training seed {seed}", cmd, run / "train.log")
+    result = _evaluate(str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option,
+                       run / "train.log")
+    result["runner"] = key
+    tmp = run / ".eval.json.part"
+    tmp.write_text(json.dumps(result))
+    os.replace(tmp, done)
+    (run / ".eval-raw.json").unlink(missing_ok=True)
+    return result
+
+
+def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
+    path = a.out / f"baseline-{name}.json"
+    key = {"episodes": a.eval_episodes, "seed": a.eval_seed, "option": a.option}
+    if path.is_file():
+        prev = json.loads(path.read_text())
+        if prev.get("runner") == key:
+            return prev
+    result = _evaluate(name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.option,
+                       a.out / f"baseline-{name}.log")
+    result["runner"] = key
+    path.write_text(json.dumps(result))
+    (a.out / f".baseline-{name}.raw").unlink(missing_ok=True)
+    return result
+
+
+def _curve(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    cols = progress.read(path, ("env_steps", "mean_return"))
+    return np.array(cols["env_steps"]), np.array(cols["mean_return"])
+
+
+def summarise(results: dict[int, dict[str, Any]], baselines: dict[str, dict[str, Any]], steps: int) -> dict[str, Any]:
+    """The summary object: per-seed figures and the aggregate over seeds."""
+    means = np.array([results[s]["mean_return"] for s in sorted(results)])
+    heuristic = baselines["heuristic"]["mean_return"]
+    lo, hi = bootstrap_ci(means)
+    return {
+        "steps": steps,
+        "seeds": sorted(results),
+        "eval": {"episodes": next(iter(results.values()))["episodes"], "seed": next(iter(results.values()))["seed"]},
+        "iqm": round(float(iqm(means)), 1),
+        "iqm_ci95": [round(float(lo), 1), round(float(hi), 1)],
+        "median": round(float(np.median(means)), 1),
+        "mean": round(float(means.mean()), 1),
+        "min": round(float(means.min()), 1),
+        "above_heuristic": int((means > heuristic).sum()),
+        "baselines": {k: {"mean_return": v["mean_return"], "std_return": v["std_return"]} for k, v in baselines.items()},
+        "per_seed": {
+            str(s): {k: results[s][k] for k in ("mean_return", "std_return", "min_return", "max_return", "mean_steps",
+                                                  "causes")}
+            for s in sorted(results)
+        },
+    }
+
+
+def markdown(summary: dict[str, Any]) -> str:
+    """The summary as a markdown table (per seed) and one aggregate line."""
+    lines = [
+        f"Held-out evaluation: {summary['eval']['episodes']} episodes from seed {summary['eval']['seed']}, greedy; "
+        f"{summary['steps']:,} env steps per training seed.",
+        "",
+        "| training seed | mean ± std | min | max | ended by bird / fuel / limit |",
+        "|---|---|---|---|---|",
+    ]
+    for s, r in summary["per_seed"].items():
+        c = r["causes"]
+        lines.append(
+            f"| {s} | {r['mean_return']:,.0f} ± {r['std_return']:,.0f} | {r['min_return']:,} | {r['max_return']:,} | "
+            f"{c.get('bird', 0):.0%} / {c.get('fuel', 0):.0%} / {c.get('truncated', 0):.0%} |"
+        )
+    for name, b in summary["baselines"].items():
+        lines.append(f"| *{name} pilot* | {b['mean_return']:,.0f} ± {b['std_return']:,.0f} | | | |")
+    lo, hi = summary["iqm_ci95"]
+    n = len(summary["per_seed"])
+    lines += [
+        "",
+        f"**IQM {summary['iqm']:,.0f} [95 % CI {lo:,.0f}–{hi:,.0f}]** over {n} seeds; median {summary['median']:,.0f}, "
+        f"mean {summary['mean']:,.0f}, worst seed {summary['min']:,.0f}; {summary['above_heuristic']} of {n} above the "
+        f"heuristic ({summary['baselines']['heuristic']['mean_return']:,.0f}).",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | None:
+    """Per-seed training curves, their IQM with a 95 % bootstrap band, and the baselines; `None` without matplotlib."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("note: no matplotlib, so no curves.png (pip install matplotlib)", file=sys.stderr)
+        return None
+    curves = {s: _curve(p) for s, p in runs.items()}
+    top = min(float(x[-1]) for x, _ in curves.values() if len(x))
+    grid = np.linspace(0, top, 101)[1:]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    ys = []
+    for s, (x, y) in sorted(curves.items()):
+        ax.plot(x / 1e6, y, color="tab:blue", alpha=0.25, linewidth=0.8)
+        ys.append(np.interp(grid, x, y, left=np.nan))
+    stack = np.array(ys).T  # (points, runs)
+    ok = ~np.isnan(stack).any(axis=1)
+    mid = iqm(stack[ok])
+    lo, hi = bootstrap_ci(stack[ok], resamples=2_000)
+    ax.plot(grid[ok] / 1e6, mid, color="tab:blue", linewidth=2, label=f"IQM of {len(curves)} seeds (95 % CI band)")
+    ax.fill_between(grid[ok] / 1e6, lo, hi, color="tab:blue", alpha=0.2, linewidth=0)
+    for name, b in summary["baselines"].items():
+        ax.axhline(b["mean_return"], linestyle="--", color="grey", linewidth=1)
+        ax.annotate(name, (1, b["mean_return"]), xycoords=("axes fraction", "data"), xytext=(-3, 3),
+                    textcoords="offset points", ha="right", color="grey")
+    ax.set_xlabel("env steps (millions)")
+    ax.set_ylabel("mean return, last 100 training episodes")
+    ax.set_title(f"ChopperScape-v0 PPO recipe: {len(curves)} training seeds "
+                 f"(held-out IQM {summary['iqm']:,.0f} [{summary['iqm_ci95'][0]:,.0f}–{summary['iqm_ci95'][1]:,.0f}])",
+                 fontsize="medium")
+    ax.legend(loc="upper left", fontsize="small")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path = out / "curves.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    from .recipe import DEFAULT_STEPS
+
+    p = argparse.ArgumentParser(prog="python -m chopperscape.learn.seeds", description=__doc__.splitlines()[0],
+                                epilog="Other flags are passed on to python -m chopperscape.learn.train.")
+    p.add_argument("--seeds", required=True, help="training seeds, e.g. 0-9 or 0,3,5")
+    p.add_argument("--out", type=Path, required=True, help="folder: seed-K/ per seed, summary.json, summary.md")
+    p.add_argument("--steps", type=int, default=DEFAULT_STEPS, help=f"env steps per seed (default {DEFAULT_STEPS:,})")
+    p.add_argument("--jobs", type=int, default=None, help="trainings at once (default: one per core)")
+    p.add_argument("--eval-episodes", type=int, default=EVAL_EPISODES)
+    p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
+    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
+    a, forward = p.parse_known_args(argv)
+    if any(f == "--seed" or f.startswith("--seed=") for f in forward):
+        p.error("--seed: give the training seeds with --seeds")
+    if any(f == "--minutes" or f.startswith("--minutes=") for f in forward):
+        p.error("--minutes: a multi-seed benchmark runs every seed to the same --steps budget")
+    try:
+        seeds = parse_seeds(a.seeds)
+    except ValueError as err:
+        p.error(str(err))
+    if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
+        p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
+    jobs = a.jobs or max(1, min(len(seeds), os.cpu_count() or 1))
+    if jobs < 1:
+        p.error(f"--jobs {a.jobs}: allowed an integer >= 1")
+    forward = forward + [x for o in a.option for x in ("--option", o)]
+    # What makes two runs of a seed the same run: a stored evaluation counts only if all of it matches.
+    key = {"steps": a.steps, "train_args": forward, "episodes": a.eval_episodes, "seed": a.eval_seed}
+    a.out.mkdir(parents=True, exist_ok=True)
+    try:
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            futures = {s: pool.submit(_seed_run, s, a, forward, key) for s in seeds}
+            base = {name: pool.submit(_baseline, name, a) for name in ("random", "heuristic")}
+            results = {s: f.result() for s, f in futures.items()}
+            baselines = {name: f.result() for name, f in base.items()}
+    except RuntimeError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+    summary = summarise(results, baselines, a.steps)
+    (a.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (a.out / "summary.md").write_text(markdown(summary))
+    plot(a.out, {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}, summary)
+    print(markdown(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

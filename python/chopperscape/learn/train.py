@@ -1,0 +1,305 @@
+"""PPO for ChopperScape: the training loop and its command line (CleanRL-style sections, PyTorch).
+
+Run it with ``python -m chopperscape.learn.train --steps 15000000 --out runs/ppo`` once the package and torch are installed.
+It steps the native :class:`chopperscape.VectorEnv` (one Rust call per batch), normalises observations with
+running statistics and rewards by the running standard deviation of the discounted return (the two things that made
+the difference: see ``docs/learning.md``), and writes as it goes:
+
+- ``OUT/progress.csv``: one row per update (the schema: :mod:`chopperscape.learn.progress`): the return and length of the last 100
+  finished episodes (empty until one has ended) (the format ``python -m chopperscape.learn.plot`` draws), the update's diagnostics (learning rate,
+  policy entropy, approximate KL, clip fraction, explained variance, value and policy losses) and how the episodes
+  that ended during the update ended (shares of ``bird``, ``fuel`` and ``limit``, the 10,000-step truncation);
+- ``OUT/model.pt``: the policy, its observation statistics and the options it was trained on, loadable by
+  ``python -m chopperscape.learn.evaluate OUT/model.pt``. It is saved at every checkpoint interval, at the end and on
+  Ctrl-C. It holds tensors and plain data only, so it is read with ``torch.load(weights_only=True)``.
+
+Training seeds are ``seed, seed + 1, …`` (one per env); evaluate on other seeds (``evaluate --seed 1000000``).
+
+Runs are reproducible: every schedule (the learning rate) follows env steps over the step budget ``--steps``, never
+the wall clock, so the same seed and budget give the same curve on any host; ``--minutes`` only stops a run early.
+A folder that already holds a run is refused unless ``--force`` (which starts the run over in it). Every setting is
+checked before anything is written; a loss that is not finite stops the run before the optimiser step, so the saved
+model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
+reached so far atomically, and exits with 130, 143, 129.
+``--seeds 0-9`` trains several seeds and reports them as the field does (see :mod:`chopperscape.learn.seeds`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections import deque
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from .. import _signals
+from .._cli import ENV_OPTIONS, env_options, print_line
+from ..vector import VectorEnv
+from . import progress
+from .model import ObsNormalizer, RunningMeanStd, build_agent, save
+from .recipe import (
+    DEFAULT_STEPS,
+    PRESETS,
+    RECIPE_FLAGS,
+    RESERVED_OPTIONS,
+    Recipe,
+    check_minutes,
+    check_recipe,
+    check_run_folder,
+    network_of,
+)
+
+try:
+    import torch
+    from torch import nn
+except ImportError as err:  # pragma: no cover - exercised only without torch
+    raise ImportError(
+        "chopperscape.learn.train needs PyTorch: pip install 'chopperscape[train]' (the CPU build is enough)"
+    ) from err
+
+#: Columns of the progress CSV (the schema and its meaning: :mod:`chopperscape.learn.progress`).
+CSV_COLUMNS = list(progress.COLUMNS)
+
+
+def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False) -> Path:
+    """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
+    schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
+    model path. `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before
+    anything is written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
+    out = Path(out)
+    check_recipe(recipe)
+    check_minutes(minutes)
+    check_run_folder(out, force)
+    torch.manual_seed(recipe.seed)
+    torch.set_num_threads(recipe.torch_threads)
+    rng = np.random.default_rng(recipe.seed)
+
+    envs = VectorEnv(
+        recipe.num_envs, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options
+    )
+    obs_shape = tuple(envs.single_observation_space.shape or ())
+    network = network_of(recipe)
+    device = torch.device(recipe.device)
+    agent = build_agent(network, obs_shape, 5, recipe.hidden).to(device)
+    optimizer = torch.optim.Adam(agent.parameters(), lr=recipe.learning_rate, eps=1e-5)
+    # Vector observations are standardised with running statistics; frames are scaled by the network itself.
+    pixels = network != "mlp"
+    obs_norm = ObsNormalizer(obs_shape, recipe.norm_obs and not pixels)
+    ret_rms = RunningMeanStd(())
+    disc_return = np.zeros(recipe.num_envs)
+
+    def encode(raw: np.ndarray) -> torch.Tensor:
+        """A batch of observations as the network takes them (frames stay uint8: a quarter of the memory)."""
+        return torch.from_numpy(raw if pixels else obs_norm(raw, update=True)).to(device)
+
+    # --- Rollout storage -------------------------------------------------------------------------------------
+    n, t_len = recipe.num_envs, recipe.num_steps
+    buf_obs = torch.zeros((t_len, n, *obs_shape), dtype=torch.uint8 if pixels else torch.float32, device=device)
+    buf_act = torch.zeros((t_len, n), dtype=torch.long, device=device)
+    buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
+    # With NEXT_STEP autoreset, the step after an episode's end is the reset step: no transition to learn from.
+    buf_valid = torch.zeros((t_len, n), device=device)
+
+    raw, _ = envs.reset(seed=recipe.seed)
+    next_obs = encode(raw)
+    next_done = np.zeros(n, bool)  # the previous step ended an episode: this step is a reset step
+    ep_return, ep_len = np.zeros(n), np.zeros(n, np.int64)
+    finished: deque[tuple[float, int]] = deque(maxlen=100)
+    episodes = 0
+    env_steps = 0
+    start = time.monotonic()
+    model_path = out / "model.pt"
+    csv_path = out / "progress.csv"
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "recipe.json", "w") as f:
+        json.dump(asdict(recipe), f, indent=2)
+    writer = progress.Writer(csv_path)
+    update = 0
+    stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
+    try:
+        while env_steps < recipe.total_steps:
+            if stop.pending is not None:
+                break
+            if minutes is not None and time.monotonic() - start >= minutes * 60:
+                break
+            # The learning rate follows env steps only: the same run on a busy host is the same run.
+            lr = recipe.learning_rate
+            if recipe.anneal_lr:
+                lr *= max(1.0 - env_steps / recipe.total_steps, 0.05)
+            optimizer.param_groups[0]["lr"] = lr
+
+            # --- Rollout ---------------------------------------------------------------------------------------
+            ends = {"bird": 0, "fuel": 0, "limit": 0}
+            for t in range(t_len):
+                valid = ~next_done
+                with torch.no_grad():
+                    action, logp, _, value = agent.act(next_obs)
+                buf_obs[t], buf_act[t], buf_logp[t], buf_val[t] = next_obs, action, logp, value
+                buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
+                raw, reward, term, trunc, info = envs.step(action.cpu().numpy())
+                env_steps += int(valid.sum())
+                done = term | trunc
+                # Episode statistics, on real (not reset) steps.
+                ep_return += np.where(valid, reward, 0)
+                ep_len += valid
+                for i in np.flatnonzero(done):
+                    finished.append((float(ep_return[i]), int(ep_len[i])))
+                    episodes += 1
+                    ends[str(info["cause"][i]) if term[i] else "limit"] += 1
+                ep_return[done], ep_len[done] = 0, 0
+                # Reward scaling by the std of the discounted return (Gymnasium's NormalizeReward).
+                r = reward.astype(np.float64)
+                if recipe.norm_reward:
+                    disc_return = np.where(valid, disc_return * recipe.gamma + r, 0.0)
+                    if valid.any():
+                        ret_rms.update(disc_return[valid])
+                    r = r / math.sqrt(ret_rms.var + 1e-8)
+                    disc_return[done] = 0.0
+                buf_rew[t] = torch.from_numpy(np.where(valid, r, 0.0).astype(np.float32)).to(device)
+                # Truncation is treated as termination (10,000 steps is ten horizons of γ = 0.999).
+                buf_done[t] = torch.from_numpy(done.astype(np.float32)).to(device)
+                next_done = done
+                next_obs = encode(raw)
+
+            # --- Advantages: GAE over valid steps; a reset step neither bootstraps nor is learned from ------------
+            with torch.no_grad():
+                next_value = agent.value(next_obs)
+                adv = torch.zeros((t_len, n), device=device)
+                last = torch.zeros(n, device=device)
+                for t in reversed(range(t_len)):
+                    nv = next_value if t == t_len - 1 else buf_val[t + 1]
+                    nonterminal = 1.0 - buf_done[t]
+                    delta = buf_rew[t] + recipe.gamma * nv * nonterminal - buf_val[t]
+                    last = delta + recipe.gamma * recipe.gae_lambda * nonterminal * last
+                    # The row after an episode's end is its reset step: it carries nothing across.
+                    last = last * buf_valid[t]
+                    adv[t] = last
+                returns = adv + buf_val
+            mask = buf_valid.reshape(-1).bool()
+            b_obs = buf_obs.reshape(-1, *obs_shape)[mask]
+            b_act, b_logp = buf_act.reshape(-1)[mask], buf_logp.reshape(-1)[mask]
+            b_adv, b_ret = adv.reshape(-1)[mask], returns.reshape(-1)[mask]
+            b_val = buf_val.reshape(-1)[mask]
+            size = b_obs.shape[0]
+
+            # --- Optimisation ------------------------------------------------------------------------------------
+            stats = np.zeros(6)  # entropy, approx_kl, clip_frac, value_loss, policy_loss, minibatches
+            for _ in range(recipe.update_epochs):
+                # Even minibatches (no tiny remainder, whose advantage std would be undefined).
+                for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
+                    _, logp, entropy, value = agent.act(b_obs[idx], b_act[idx])
+                    log_ratio = logp - b_logp[idx]
+                    ratio = log_ratio.exp()
+                    a = b_adv[idx]
+                    a = (a - a.mean()) / (a.std() + 1e-8)
+                    pg = torch.max(-a * ratio, -a * ratio.clamp(1 - recipe.clip_coef, 1 + recipe.clip_coef)).mean()
+                    v_loss = 0.5 * ((value - b_ret[idx]) ** 2).mean()
+                    ent = entropy.mean()
+                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss
+                    if not torch.isfinite(loss):
+                        raise FloatingPointError(f"loss became {loss.item()} at update {update}")
+                    optimizer.zero_grad()
+                    loss.backward()
+                    nn.utils.clip_grad_norm_(agent.parameters(), recipe.max_grad_norm)
+                    optimizer.step()
+                    with torch.no_grad():
+                        # Schulman's low-variance KL estimator, as CleanRL logs it.
+                        kl = ((ratio - 1) - log_ratio).mean()
+                        clipped = ((ratio - 1).abs() > recipe.clip_coef).float().mean()
+                    stats += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1]
+            update += 1
+            var_ret = b_ret.var().item()
+            explained = float("nan") if var_ret == 0 else 1 - (b_ret - b_val).var().item() / var_ret
+
+            # --- Logging -----------------------------------------------------------------------------------------
+            # One row per update; the return columns stay empty until the first episode has ended.
+            rets = np.array([r for r, _ in finished])
+            lens = np.array([l for _, l in finished])
+            ended = sum(ends.values())
+            m = stats[:5] / max(stats[5], 1)
+            row = {"env_steps": env_steps, "wall_s": f"{time.monotonic() - start:.1f}", "episodes": episodes,
+                   "learning_rate": f"{lr:.6g}", "entropy": f"{m[0]:.4f}", "approx_kl": f"{m[1]:.5f}",
+                   "clip_frac": f"{m[2]:.4f}", "explained_var": f"{explained:.4f}", "value_loss": f"{m[3]:.5f}",
+                   "policy_loss": f"{m[4]:.5f}", "ended": ended}
+            if finished:
+                row.update(mean_return=f"{rets.mean():.1f}", std_return=f"{rets.std():.1f}",
+                           mean_length=f"{lens.mean():.1f}")
+            if ended:
+                row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
+            writer.row(row)
+            if update % 50 == 0:
+                save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+    finally:
+        writer.close()
+        envs.close()
+        stop.restore()
+    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+    stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
+    return model_path
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
+        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
+        from . import seeds
+
+        return seeds.main(args)
+    p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=__doc__.splitlines()[0])
+    p.add_argument("--out", type=Path, required=True,
+                   help="folder for progress.csv, model.pt, recipe.json (with --seeds: one sub-folder per seed)")
+    p.add_argument("--steps", type=int, default=DEFAULT_STEPS,
+                   help=f"env-step budget; the learning rate anneals over it (default {DEFAULT_STEPS:,})")
+    p.add_argument("--minutes", type=float, default=None,
+                   help="stop after this much wall time (only stops: the schedule still follows --steps)")
+    p.add_argument("--seeds", default=None, metavar="LIST",
+                   help="train these seeds (e.g. 0-9 or 0,3,5), evaluate each on held-out seeds and write a summary "
+                   "(runs python -m chopperscape.learn.seeds, which documents its own flags: --jobs, --eval-episodes, ...)")
+    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                   help="an env option, e.g. --option frame_skip=4 (JSON values)")
+    p.add_argument("--preset", choices=sorted(PRESETS), default="features",
+                   help="recipe preset: features (the default), pixels (grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it")
+    defaults = Recipe()
+    for f in RECIPE_FLAGS:
+        p.add_argument(f"--{f.replace('_', '-')}", type=type(getattr(defaults, f)), default=None,
+                       help=f"default {getattr(defaults, f)!r} (or the preset's)")
+    p.add_argument("--no-norm-obs", action="store_true")
+    p.add_argument("--no-norm-reward", action="store_true")
+    p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
+    a = p.parse_args(args)
+    preset = dict(PRESETS[a.preset])
+    allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
+    options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
+    settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
+    settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
+    recipe = Recipe(
+        **settings, env_options=options, norm_obs=not a.no_norm_obs, norm_reward=not a.no_norm_reward,
+        total_steps=a.steps,
+    )
+    try:
+        check_recipe(recipe)
+        check_minutes(a.minutes)
+        check_run_folder(a.out, a.force)
+    except ValueError as e:
+        p.error(str(e))
+    try:
+        path = train(recipe, a.out, a.minutes, force=a.force)
+    except ValueError as e:  # an env option the env refuses
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except FloatingPointError as e:
+        print(f"error: training stopped: {e}; the model saved last is kept", file=sys.stderr)
+        return 1
+    except _signals.Interrupted as e:
+        print(e, file=sys.stderr)
+        return e.exit_code
+    return print_line(json.dumps({"model": str(path), "progress": str(a.out / "progress.csv")}))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
