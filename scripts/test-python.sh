@@ -26,7 +26,7 @@ quiet "$PY" -m pip install --disable-pip-version-check -q "maturin>=1.9.4,<2" "g
 "$PY" -c "import torch, stable_baselines3, matplotlib" >/dev/null 2>&1 \
   || quiet "$PY" -m pip install --disable-pip-version-check -q torch "stable-baselines3>=2.4" matplotlib \
   || say "skipped: torch / stable-baselines3 / matplotlib could not be installed; the learning tests are skipped"
-# The ONNX export (python -m chopperscape.export): onnx writes its metadata, onnxruntime checks its logits.
+# The ONNX export (python -m chopperscape.learn.export): onnx writes its metadata, onnxruntime checks its logits.
 "$PY" -c "import onnx, onnxruntime" >/dev/null 2>&1 \
   || quiet "$PY" -m pip install --disable-pip-version-check -q onnx onnxruntime \
   || say "skipped: onnx / onnxruntime could not be installed; the export tests are skipped"

@@ -15,7 +15,7 @@ const DIRECTIONS = {
   ArrowUp: 3, KeyW: 3,
 };
 const CAUSES = { bird: "Hit by a bird", fuel: "Out of fuel" };
-// The trained agent: `models/ppo-features.pt` exported by `python -m chopperscape.export`, served beside the page.
+// The trained agent: `models/ppo-features.pt` exported by `python -m chopperscape.learn.export`, served beside the page.
 const AGENT_URL = "models/ppo-features.onnx";
 
 const $ = (id) => document.getElementById(id);
