@@ -11,7 +11,7 @@
 //!   (features, or pixels from the [`render::Renderer`], stacked `frame_stack` deep). Its hot path
 //!   [`ChopperScape::step_into`] writes into a buffer the caller owns.
 //! - [`Snapshot`] clones and restores a whole environment, and encodes it to versioned bytes.
-//! - [`policy`] holds the built-in pilots: `random`, fixed actions, and the scripted `heuristic`.
+//! - [`policy`] holds the built-in policies: `random`, fixed actions, and the scripted `heuristic`.
 //!
 //! # Examples
 //! ```
