@@ -1,5 +1,5 @@
-"""The pilots in Python play exactly the command line's episodes (`chopperscape demo --json`), for one env and
-for the native vector env, through gymnasium wrappers, under any options."""
+"""The built-in policies in Python play exactly the command line's episodes (`chopperscape demo --json`), for one
+env and for the native vector env, through gymnasium wrappers, under any options."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import chopperscape
-from chopperscape import pilots
+from chopperscape import policies
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 #: (gym option name, CLI flag) for the options the tests vary.
@@ -67,18 +67,18 @@ CASES = [
 
 
 @pytest.mark.parametrize("policy,options", CASES, ids=[f"{p}-{'-'.join(map(str, o.values())) or 'v0'}" for p, o in CASES])
-def test_single_env_pilot_plays_the_cli_demo_episodes(policy, options):
+def test_single_env_policy_plays_the_cli_demo_episodes(policy, options):
     expected = demo(policy, 3, 11, options)
-    got = list(pilots.episodes(policy, 3, 11, max_episode_steps=STEPS, **options))
+    got = list(policies.episodes(policy, 3, 11, max_episode_steps=STEPS, **options))
     assert [{k: v for k, v in e.items() if k != "actions"} for e in got] == expected
 
 
 @pytest.mark.parametrize("policy,options", CASES[:4], ids=[p for p, _ in CASES[:4]])
-def test_vector_pilot_plays_the_cli_demo_episodes(policy, options):
+def test_vector_policy_plays_the_cli_demo_episodes(policy, options):
     n, seed = 3, 11
     expected = demo(policy, n, seed, options)
     envs = chopperscape.VectorEnv(n, obs_type="features", max_episode_steps=STEPS, **options)
-    batch = pilots.VectorPilot(policy, n, seed=seed)
+    batch = policies.VectorPolicy(policy, n, seed=seed)
     envs.reset(seed=seed)
     returns, steps, done = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
     causes = [None] * n
@@ -99,20 +99,20 @@ def test_vector_pilot_plays_the_cli_demo_episodes(policy, options):
     assert got == expected
 
 
-def test_vector_pilot_continues_across_autoresets_as_a_single_env_pilot():
+def test_vector_policy_continues_across_autoresets_as_a_single_env_policy():
     opts = {"obs_type": "features", "max_fuel": 60, "bird_prob": 0.1}
     envs = chopperscape.VectorEnv(2, **opts)
-    batch = pilots.VectorPilot("random", 2, seed=4)
+    batch = policies.VectorPolicy("random", 2, seed=4)
     envs.reset(seed=4)
     vector_actions = []
     for _ in range(200):
         actions = batch.act(envs)
         vector_actions.append(int(actions[1]))
         envs.step(actions)
-    # Environment 1 alone: seed 5, its pilot seeded 5 and not restarted between episodes; the autoreset step's
+    # Environment 1 alone: seed 5, its policy seeded 5 and not restarted between episodes; the autoreset step's
     # action is ignored (Do Nothing) and draws nothing.
     env = gym.make("ChopperScape-v0", **opts)
-    pilot = pilots.random(5)
+    policy = policies.random(5)
     env.reset(seed=5)
     single_actions, ended = [], False
     for _ in range(200):
@@ -121,17 +121,17 @@ def test_vector_pilot_continues_across_autoresets_as_a_single_env_pilot():
             env.reset()
             ended = False
             continue
-        a = pilot.act(env)
+        a = policy.act(env)
         single_actions.append(a)
         _, _, terminated, truncated, _ = env.step(a)
         ended = terminated or truncated
     assert vector_actions == single_actions
 
 
-def test_random_pilot_is_seeded_and_reset_restarts_it():
+def test_random_policy_is_seeded_and_reset_restarts_it():
     env = gym.make("ChopperScape-v0", obs_type="features")
     env.reset(seed=0)
-    a, b = pilots.random(9), pilots.random(9)
+    a, b = policies.random(9), policies.random(9)
     xs = [a.act(env) for _ in range(60)]
     assert xs == [b.act(env) for _ in range(60)]
     assert set(xs) == {0, 1, 2, 3, 4}
@@ -139,41 +139,52 @@ def test_random_pilot_is_seeded_and_reset_restarts_it():
     assert [a.act(env) for _ in range(60)] == xs
     a.reset(10)
     assert [a.act(env) for _ in range(60)] != xs
-    assert repr(a) == "Pilot('random', seed=10)"
+    assert repr(a) == "Policy('random', seed=10)"
 
 
-def test_fixed_pilots_and_names():
+def test_fixed_policies_and_names():
     env = gym.make("ChopperScape-v0", obs_type="features")
     env.reset(seed=0)
-    assert [pilots.fixed(i).act(env) for i in range(5)] == [0, 1, 2, 3, 4]
-    assert pilots.fixed("up").act(env) == 3
-    assert set(pilots.NAMES) == {"random", "heuristic", "right", "left", "down", "up", "noop"}
+    assert [policies.fixed(i).act(env) for i in range(5)] == [0, 1, 2, 3, 4]
+    assert policies.fixed("up").act(env) == 3
+    assert set(policies.NAMES) == {"random", "heuristic", "right", "left", "down", "up", "noop"}
 
 
 def test_heuristic_plans_for_the_frame_skip_of_the_env_it_flies():
     # At frame_skip 4 the heuristic plans in agent steps: far above random (planning per frame, it fell to
     # about random).
     mean = {
-        name: np.mean([e["return"] for e in pilots.episodes(name, 4, 0, max_episode_steps=STEPS, frame_skip=4)])
+        name: np.mean([e["return"] for e in policies.episodes(name, 4, 0, max_episode_steps=STEPS, frame_skip=4)])
         for name in ("random", "heuristic")
     }
     assert mean["heuristic"] > 3 * mean["random"], mean
 
 
 def test_bad_input_is_refused_clearly():
-    with pytest.raises(ValueError, match="unknown pilot 'genius'.*heuristic"):
-        pilots.make("genius")
+    with pytest.raises(ValueError, match="unknown policy 'genius'.*heuristic"):
+        policies.make("genius")
     with pytest.raises(ValueError, match="invalid seed -1"):
-        pilots.random(-1)
+        policies.random(-1)
     with pytest.raises(ValueError, match="invalid fixed action 7"):
-        pilots.fixed(7)
+        policies.fixed(7)
     envs = chopperscape.VectorEnv(2, obs_type="features")
     envs.reset(seed=0)
-    with pytest.raises(TypeError, match="VectorPilot"):
-        pilots.heuristic().act(envs)
-    with pytest.raises(ValueError, match="has 2 environments but this pilot flies 3"):
-        pilots.VectorPilot("heuristic", 3).act(envs)
+    with pytest.raises(TypeError, match="VectorPolicy"):
+        policies.heuristic().act(envs)
+    with pytest.raises(ValueError, match="has 2 environments but this policy plays 3"):
+        policies.VectorPolicy("heuristic", 3).act(envs)
     with pytest.raises(TypeError, match="native VectorEnv"):
-        pilots.VectorPilot("heuristic", 2).act(gym.make("ChopperScape-v0", obs_type="features"))
+        policies.VectorPolicy("heuristic", 2).act(gym.make("ChopperScape-v0", obs_type="features"))
     with pytest.raises(ValueError, match="num_envs"):
-        pilots.VectorPilot("heuristic", 0)
+        policies.VectorPolicy("heuristic", 0)
+
+
+def test_the_package_exports_policies():
+    assert "policies" in chopperscape.__all__ and chopperscape.policies is policies
+
+
+def test_the_core_classes_are_named_policy():
+    core = chopperscape._core
+    assert core.Policy.__name__ == "Policy" and core.VectorPolicy.__name__ == "VectorPolicy"
+    assert core.Policy.__module__ == "chopperscape._core"
+    assert list(core.POLICY_NAMES) == policies.NAMES
