@@ -6,7 +6,7 @@
 #   3. `auditwheel show` agrees with each wheel's manylinux_2_17 tag, and no ELF file in a wheel needs a glibc
 #      symbol newer than GLIBC_2.17 (fails as soon as one creeps in), for both architectures;
 #   4. both wheels installed into a fresh venv with no Rust toolchain on PATH: scripts/dist/smoke_test.py (make,
-#      step, check_env, the vector env, pilots, the `chopperscape` command) under pytest, run outside the repository,
+#      step, check_env, the vector env, built-in policies, the `chopperscape` command) under pytest, run outside the repository,
 #      with python3 and with CPython 3.9 and 3.13 where installed (the abi3 wheel's oldest and newest claimed);
 #   5. the sdist unpacked into target/dist-sdist/src and installed by pip into a fresh venv, with pip's isolated
 #      build (maturin from PyPI; cargo builds into target/dist-sdist/target, so a second run rebuilds only what

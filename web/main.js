@@ -94,7 +94,7 @@ function newGame() {
 
 function action() {
   if (agent) return game.agent_action();
-  if (pilot) return game.pilot_action();
+  if (pilot) return game.heuristic_action();
   return held.length ? DIRECTIONS[held[held.length - 1]] : NOOP;
 }
 

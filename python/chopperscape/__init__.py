@@ -14,14 +14,14 @@ from gymnasium.envs.registration import register, registry
 from . import _core
 from .env import ChopperScapeEnv, clone_state, restore_state
 from .vector import VectorEnv
-from . import pilots
+from . import policies
 
 __all__ = [
     "ChopperScapeEnv",
     "VectorEnv",
     "clone_state",
     "restore_state",
-    "pilots",
+    "policies",
     "ACTION_MEANINGS",
     "OPTION_NAMES",
     "FEATURES_VERSION",

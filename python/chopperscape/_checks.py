@@ -1,4 +1,4 @@
-"""The argument rules every surface shares (environments, pilots, datasets, the recipe, evaluation): one
+"""The argument rules every surface shares (environments, policies, datasets, the recipe, evaluation): one
 function per kind of value, each raising `ValueError` that names the argument, the value and what is allowed."""
 
 from __future__ import annotations
@@ -62,11 +62,17 @@ def core_seed(seed: Any, what: str = "seed") -> int:
     return int(seed) & _U64
 
 
-def pilot_seed(seed: Any) -> int:
-    """A pilot's (and a dataset's first) seed: an integer in `[0, 2**64)`, as the command line's `--seed`."""
+def policy_seed(seed: Any) -> int:
+    """A built-in policy's (and a dataset's first) seed: an integer in `[0, 2**64)`, as the command line's
+    `--seed`."""
     if not _is_int(seed) or not 0 <= seed <= _U64:
         raise ValueError(f"invalid seed {seed!r}: allowed an integer in [0, 2**64)")
     return int(seed)
+
+
+# The old name, kept while `train.py` still imports it (issue 18 renamed "pilot" to "policy"); remove it once
+# nothing imports `pilot_seed`.
+pilot_seed = policy_seed
 
 
 def time_limit(value: Any) -> int | None:

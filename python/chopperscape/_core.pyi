@@ -15,7 +15,8 @@ FEATURES_VERSION: int
 #: (`hud_style="auto"`), 1 drew the text line at every size (docs/SPEC.md, "HUD and pixel layout").
 PIXELS_VERSION: int
 RENDER_FPS: int
-PILOT_NAMES: list[str]
+#: The built-in policies' names, as the command line's `--policy` takes them.
+POLICY_NAMES: list[str]
 #: The most memory one environment's observation buffers may take (bytes); options over it raise ValueError.
 MAX_ENV_BYTES: int
 #: The most memory one VectorEnv may take (bytes); batches over it raise ValueError.
@@ -109,8 +110,8 @@ class VectorEnv:
 
 def _panic(message: str) -> None: ...
 
-class Pilot:
-    """A built-in pilot (`random`, `heuristic`, or a fixed action) reading one `Env`'s world."""
+class Policy:
+    """A built-in policy (`random`, `heuristic`, or a fixed action) reading one `Env`'s world."""
 
     def __init__(self, name: str, seed: int = 0) -> None: ...
     def act(self, env: Env) -> int: ...
@@ -120,8 +121,8 @@ class Pilot:
     @property
     def seed(self) -> int: ...
 
-class VectorPilot:
-    """One built-in pilot per environment of a `VectorEnv`; pilot i is seeded seed + i."""
+class VectorPolicy:
+    """One built-in policy per environment of a `VectorEnv`; policy i is seeded seed + i."""
 
     def __init__(self, name: str, num_envs: int, seed: int = 0) -> None: ...
     def act(self, envs: VectorEnv) -> npt.NDArray[np.int64]: ...

@@ -345,25 +345,25 @@ def test_two_threads_on_one_env_get_a_message_that_says_so():
     assert errors and "cannot be used from two threads at once" in errors[0], errors
 
 
-# --- pilots and copy=False arrays (hardening, round two) --------------------------------------------------
+# --- built-in policies and copy=False arrays (hardening, round two) --------------------------------------------------
 
 
-def test_vector_pilot_sizes_are_checked_against_the_batch_budget_before_allocating():
-    from chopperscape import pilots
+def test_vector_policy_sizes_are_checked_against_the_batch_budget_before_allocating():
+    from chopperscape import policies
 
     for bad in (0, -1, 2**64, 1.5, "8", True):
         with pytest.raises(ValueError, match="num_envs"):
-            pilots.VectorPilot("heuristic", bad)
+            policies.VectorPolicy("heuristic", bad)
     # In a process with 1 GiB of address space: without the budget, these sizes took the machine's memory or
     # aborted the interpreter.
     code = textwrap.dedent(
         """
         import resource
         resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
-        from chopperscape import pilots
+        from chopperscape import policies
         for n in (2**62, 2**64 - 1, 10**8, 10**7):
             try:
-                pilots.VectorPilot("heuristic", n)
+                policies.VectorPolicy("heuristic", n)
             except (ValueError, MemoryError) as e:
                 print("refused:", e)
         """
@@ -376,15 +376,15 @@ def test_vector_pilot_sizes_are_checked_against_the_batch_budget_before_allocati
 
 
 @pytest.mark.parametrize("n", [-1, 0, 2.5, "3", None, True])
-def test_pilot_episodes_checks_its_arguments_at_once(n):
-    from chopperscape import pilots
+def test_policy_episodes_checks_its_arguments_at_once(n):
+    from chopperscape import policies
 
     with pytest.raises(ValueError, match="`n`"):
-        pilots.episodes("random", n)
+        policies.episodes("random", n)
     with pytest.raises(ValueError, match="seed"):
-        pilots.episodes("random", 1, seed=-1)
+        policies.episodes("random", 1, seed=-1)
     with pytest.raises(ValueError, match="max_episode_steps"):
-        pilots.episodes("random", 1, max_episode_steps=0)
+        policies.episodes("random", 1, max_episode_steps=0)
 
 
 def _busy(step, stop):
@@ -398,22 +398,22 @@ def _busy(step, stop):
     return threading.Thread(target=run)
 
 
-def test_a_pilot_on_an_env_another_thread_steps_gets_the_two_threads_message():
-    from chopperscape import pilots
+def test_a_policy_on_an_env_another_thread_steps_gets_the_two_threads_message():
+    from chopperscape import policies
 
     core = _core.Env({"obs_size": (1024, 1024), "frame_stack": 4, "bird_prob": 0.0, "max_fuel": 1000000})
     core.reset(0)
     envs = VectorEnv(4, obs_size=(512, 512), frame_stack=2, bird_prob=0.0, max_fuel=1000000, max_episode_steps=None)
     envs.reset(seed=0)
-    for act, step in [(lambda: pilots.Pilot("heuristic").act(core), lambda: core.step(4)),
-                      (lambda: pilots.VectorPilot("heuristic", 4).act(envs), lambda: envs.step(np.full(4, 4)))]:
+    for act, step in [(lambda: policies.Policy("heuristic").act(core), lambda: core.step(4)),
+                      (lambda: policies.VectorPolicy("heuristic", 4).act(envs), lambda: envs.step(np.full(4, 4)))]:
         stop = threading.Event()
         worker = _busy(step, stop)
         worker.start()
         errors = []
         try:
             for _ in range(20000):
-                time.sleep(0.0002)  # lets the other thread into a step (the pilot holds the env while it plans)
+                time.sleep(0.0002)  # lets the other thread into a step (the policy holds the env while it plans)
                 try:
                     act()
                 except RuntimeError as e:

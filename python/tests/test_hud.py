@@ -66,7 +66,7 @@ def test_grayscale_frames_decode_to_info_fuel_at_every_level_and_to_info_lives(m
 
 
 def test_fuel_and_lives_decode_through_refuels_and_hits_in_a_stacked_vector_env():
-    # Default rules with tanks and birds, five lives, a random pilot: the newest frame of each stack decodes.
+    # Default rules with tanks and birds, five lives, random actions: the newest frame of each stack decodes.
     envs = VectorEnv(4, obs_type="grayscale", obs_size=(84, 84), frame_stack=4, lives=5, bird_prob=0.05)
     obs, info = envs.reset(seed=3)
     rng = np.random.default_rng(0)

@@ -1,179 +1,84 @@
-"""The pilots in Python play exactly the command line's episodes (`chopperscape demo --json`), for one env and
-for the native vector env, through gymnasium wrappers, under any options."""
+"""The deprecated module `chopperscape.pilots` (renamed `chopperscape.policies`, issue 18): importing it warns,
+and its old names still work.
+
+It also re-exports `ROOT` and `cli` from `test_policies` for the test modules that still import them from here
+(`test_datasets.py`, `test_datasets_hostile.py`, `test_export.py`); import them from `test_policies` instead.
+"""
 
 from __future__ import annotations
 
-import functools
-import json
-import pathlib
-import shutil
+import importlib
 import subprocess
+import sys
 
 import gymnasium as gym
-import numpy as np
 import pytest
 
 import chopperscape
-from chopperscape import pilots
+from chopperscape import policies
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-#: (gym option name, CLI flag) for the options the tests vary.
-FLAGS = {
-    "frame_skip": "--frame-skip",
-    "sticky_prob": "--sticky",
-    "lives": "--lives",
-    "alien_prob": "--aliens",
-    "bird_fuel_collision": "--bird-fuel-collision",
-    "max_fuel": "--max-fuel",
-}
-#: Short episodes, so that a debug build of the CLI plays them quickly.
-STEPS = 1500
+from test_policies import ROOT, cli  # noqa: F401  (re-exported, see above)
+
+MESSAGE = "chopperscape.pilots is deprecated: use chopperscape.policies (Pilot -> Policy, VectorPilot -> VectorPolicy)"
 
 
-@functools.cache
-def cli() -> pathlib.Path | None:
-    """The `chopperscape` binary, built by cargo (debug), or None without cargo."""
-    if shutil.which("cargo") is None:
-        return None
-    subprocess.run(["cargo", "build", "-q", "-p", "chopperscape-cli"], cwd=ROOT, check=True)
-    meta = json.loads(
-        subprocess.run(
-            ["cargo", "metadata", "--format-version", "1", "--no-deps"], cwd=ROOT, check=True, capture_output=True
-        ).stdout
+def _import_pilots():
+    """Imports (or re-imports) `chopperscape.pilots`, returning the module; the warning goes to the caller."""
+    if "chopperscape.pilots" in sys.modules:
+        return importlib.reload(sys.modules["chopperscape.pilots"])
+    return importlib.import_module("chopperscape.pilots")
+
+
+def test_importing_the_old_module_warns_deprecation():
+    with pytest.warns(DeprecationWarning) as record:
+        _import_pilots()
+    messages = [str(w.message) for w in record if issubclass(w.category, DeprecationWarning)]
+    assert messages == [MESSAGE]
+
+
+def test_the_warning_points_at_the_importer():
+    # In a fresh interpreter, so that the module is really imported; the warning's location is the `import` line.
+    code = (
+        "import warnings\n"
+        "warnings.simplefilter('always')\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    from chopperscape import pilots\n"
+        "print(len(w), w[0].category.__name__, w[0].filename, w[0].lineno)\n"
     )
-    return pathlib.Path(meta["target_directory"]) / "debug" / "chopperscape"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["1", "DeprecationWarning", "<string>", "4"], out.stdout
 
 
-def demo(policy: str, episodes: int, seed: int, options: dict) -> list[dict]:
-    exe = cli()
-    if exe is None:
-        pytest.skip("cargo is not installed: the comparison with `chopperscape demo --json` is skipped")
-    cmd = [str(exe), "demo", "--policy", policy, "--episodes", str(episodes), "--seed", str(seed), "--json"]
-    cmd += ["--max-episode-steps", str(STEPS)]
-    for k, v in options.items():
-        cmd += [FLAGS[k], str(v)]
-    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    return [json.loads(line) for line in out.splitlines()]
+def test_the_old_names_still_work():
+    with pytest.warns(DeprecationWarning, match="chopperscape.pilots is deprecated"):
+        pilots = _import_pilots()
+    assert pilots.Pilot is policies.Policy and pilots.VectorPilot is policies.VectorPolicy
+    assert pilots.Policy is policies.Policy and pilots.VectorPolicy is policies.VectorPolicy
+    for name in ("NAMES", "make", "random", "heuristic", "fixed", "episodes"):
+        assert getattr(pilots, name) is getattr(policies, name), name
+    assert set(pilots.__all__) >= set(policies.__all__) | {"Pilot", "VectorPilot"}
 
-
-CASES = [
-    ("random", {}),
-    ("heuristic", {}),
-    ("up", {}),
-    ("heuristic", {"frame_skip": 4, "sticky_prob": 0.25}),
-    ("random", {"frame_skip": 3, "sticky_prob": 0.5}),
-    ("heuristic", {"alien_prob": 0.02, "lives": 3, "bird_fuel_collision": "destroy", "max_fuel": 300}),
-]
-
-
-@pytest.mark.parametrize("policy,options", CASES, ids=[f"{p}-{'-'.join(map(str, o.values())) or 'v0'}" for p, o in CASES])
-def test_single_env_pilot_plays_the_cli_demo_episodes(policy, options):
-    expected = demo(policy, 3, 11, options)
-    got = list(pilots.episodes(policy, 3, 11, max_episode_steps=STEPS, **options))
-    assert [{k: v for k, v in e.items() if k != "actions"} for e in got] == expected
-
-
-@pytest.mark.parametrize("policy,options", CASES[:4], ids=[p for p, _ in CASES[:4]])
-def test_vector_pilot_plays_the_cli_demo_episodes(policy, options):
-    n, seed = 3, 11
-    expected = demo(policy, n, seed, options)
-    envs = chopperscape.VectorEnv(n, obs_type="features", max_episode_steps=STEPS, **options)
-    batch = pilots.VectorPilot(policy, n, seed=seed)
-    envs.reset(seed=seed)
-    returns, steps, done = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=bool)
-    causes = [None] * n
-    while not done.all():
-        actions = batch.act(envs)
-        assert actions.dtype == np.int64 and actions.shape == (n,)
-        _, rewards, terminated, truncated, info = envs.step(actions)
-        live = ~done
-        returns[live] += rewards[live].astype(np.int64)
-        steps[live] += 1
-        for i in np.flatnonzero(live & (terminated | truncated)):
-            causes[i] = info["cause"][i] if terminated[i] else "truncated"
-        done |= terminated | truncated
-    got = [
-        {"episode": i, "seed": seed + i, "steps": int(steps[i]), "return": int(returns[i]), "cause": causes[i]}
-        for i in range(n)
-    ]
-    assert got == expected
-
-
-def test_vector_pilot_continues_across_autoresets_as_a_single_env_pilot():
-    opts = {"obs_type": "features", "max_fuel": 60, "bird_prob": 0.1}
-    envs = chopperscape.VectorEnv(2, **opts)
-    batch = pilots.VectorPilot("random", 2, seed=4)
-    envs.reset(seed=4)
-    vector_actions = []
-    for _ in range(200):
-        actions = batch.act(envs)
-        vector_actions.append(int(actions[1]))
-        envs.step(actions)
-    # Environment 1 alone: seed 5, its pilot seeded 5 and not restarted between episodes; the autoreset step's
-    # action is ignored (Do Nothing) and draws nothing.
-    env = gym.make("ChopperScape-v0", **opts)
-    pilot = pilots.random(5)
-    env.reset(seed=5)
-    single_actions, ended = [], False
-    for _ in range(200):
-        if ended:
-            single_actions.append(4)
-            env.reset()
-            ended = False
-            continue
-        a = pilot.act(env)
-        single_actions.append(a)
-        _, _, terminated, truncated, _ = env.step(a)
-        ended = terminated or truncated
-    assert vector_actions == single_actions
-
-
-def test_random_pilot_is_seeded_and_reset_restarts_it():
     env = gym.make("ChopperScape-v0", obs_type="features")
     env.reset(seed=0)
-    a, b = pilots.random(9), pilots.random(9)
-    xs = [a.act(env) for _ in range(60)]
-    assert xs == [b.act(env) for _ in range(60)]
-    assert set(xs) == {0, 1, 2, 3, 4}
-    a.reset()
-    assert [a.act(env) for _ in range(60)] == xs
-    a.reset(10)
-    assert [a.act(env) for _ in range(60)] != xs
-    assert repr(a) == "Pilot('random', seed=10)"
-
-
-def test_fixed_pilots_and_names():
-    env = gym.make("ChopperScape-v0", obs_type="features")
-    env.reset(seed=0)
-    assert [pilots.fixed(i).act(env) for i in range(5)] == [0, 1, 2, 3, 4]
-    assert pilots.fixed("up").act(env) == 3
-    assert set(pilots.NAMES) == {"random", "heuristic", "right", "left", "down", "up", "noop"}
-
-
-def test_heuristic_plans_for_the_frame_skip_of_the_env_it_flies():
-    # At frame_skip 4 the heuristic plans in agent steps: far above random (planning per frame, it fell to
-    # about random).
-    mean = {
-        name: np.mean([e["return"] for e in pilots.episodes(name, 4, 0, max_episode_steps=STEPS, frame_skip=4)])
-        for name in ("random", "heuristic")
-    }
-    assert mean["heuristic"] > 3 * mean["random"], mean
-
-
-def test_bad_input_is_refused_clearly():
-    with pytest.raises(ValueError, match="unknown pilot 'genius'.*heuristic"):
-        pilots.make("genius")
-    with pytest.raises(ValueError, match="invalid seed -1"):
-        pilots.random(-1)
-    with pytest.raises(ValueError, match="invalid fixed action 7"):
-        pilots.fixed(7)
+    old, new = pilots.Pilot("random", 3), policies.Policy("random", 3)
+    assert [old.act(env) for _ in range(20)] == [new.act(env) for _ in range(20)]
     envs = chopperscape.VectorEnv(2, obs_type="features")
     envs.reset(seed=0)
-    with pytest.raises(TypeError, match="VectorPilot"):
-        pilots.heuristic().act(envs)
-    with pytest.raises(ValueError, match="has 2 environments but this pilot flies 3"):
-        pilots.VectorPilot("heuristic", 3).act(envs)
-    with pytest.raises(TypeError, match="native VectorEnv"):
-        pilots.VectorPilot("heuristic", 2).act(gym.make("ChopperScape-v0", obs_type="features"))
-    with pytest.raises(ValueError, match="num_envs"):
-        pilots.VectorPilot("heuristic", 0)
+    old_batch, new_batch = pilots.VectorPilot("heuristic", 2), policies.VectorPolicy("heuristic", 2)
+    assert old_batch.act(envs).tolist() == new_batch.act(envs).tolist()
+    old_eps = [e["return"] for e in pilots.episodes("heuristic", 2, 0, max_episode_steps=200)]
+    assert old_eps == [e["return"] for e in policies.episodes("heuristic", 2, 0, max_episode_steps=200)]
+
+
+def test_the_compiled_module_keeps_no_old_name():
+    # Only the Python shim keeps the old names; `chopperscape._core` has `Policy`, `VectorPolicy`, `POLICY_NAMES`.
+    assert not [name for name in dir(chopperscape._core) if "pilot" in name.lower()]
+
+
+def test_importing_chopperscape_does_not_import_the_old_module():
+    assert "pilots" not in chopperscape.__all__
+    # A fresh interpreter that turns warnings into errors: `import chopperscape` must not touch the old module.
+    code = "import sys, chopperscape; assert 'chopperscape.pilots' not in sys.modules, sorted(sys.modules)"
+    out = subprocess.run([sys.executable, "-W", "error", "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]

@@ -15,7 +15,7 @@ import numpy as np
 from gymnasium.utils.env_checker import check_env
 
 import chopperscape
-from chopperscape import pilots
+from chopperscape import policies
 
 
 def test_no_rust_toolchain_and_the_installed_package():
@@ -63,11 +63,11 @@ def test_vector_env_equals_single_envs():
     assert isinstance(envs.unwrapped, chopperscape.VectorEnv)
 
 
-def test_pilots():
-    episodes = list(pilots.episodes("heuristic", 2, seed=0))
+def test_policies():
+    episodes = list(policies.episodes("heuristic", 2, seed=0))
     assert len(episodes) == 2 and all(e["return"] > 0 for e in episodes)
     envs = chopperscape.VectorEnv(8, obs_type="features")
-    batch = pilots.VectorPilot("heuristic", num_envs=8, seed=0)
+    batch = policies.VectorPolicy("heuristic", num_envs=8, seed=0)
     envs.reset(seed=0)
     actions = batch.act(envs)
     assert actions.shape == (8,) and set(actions.tolist()) <= set(range(5))
@@ -84,7 +84,7 @@ def test_the_cli_wheel_matches_the_package():
         text=True,
     ).stdout
     lines = [json.loads(line) for line in out.splitlines()]
-    expected = list(pilots.episodes("heuristic", 2, seed=0))
+    expected = list(policies.episodes("heuristic", 2, seed=0))
     assert [e["return"] for e in lines] == [e["return"] for e in expected]
     version = subprocess.run([exe, "--version"], check=True, capture_output=True, text=True).stdout
     assert chopperscape.__version__ in version

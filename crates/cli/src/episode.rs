@@ -1,4 +1,4 @@
-//! Playing one episode headless: with a built-in pilot, a trained policy, or from a list of actions.
+//! Playing one episode headless: with a built-in policy, a trained policy, or from a list of actions.
 //!
 //! The env observes the cheap `features` vector (nothing is drawn), or for a trained policy what the policy
 //! takes; a caller that records asks the env for the full frame through the `frame` callback, which runs after
@@ -119,7 +119,7 @@ pub fn cause_of(status: Status) -> Option<&'static str> {
     }
 }
 
-/// The most agent steps the command line plays in one episode when `max_episode_steps` is `none`: a pilot
+/// The most agent steps the command line plays in one episode when `max_episode_steps` is `none`: a policy
 /// that never crashes (`noop` with `--bird-prob 0 --fuel-prob 1`) would otherwise play, and hold its actions,
 /// forever. A thousand times the default limit; the actions of such an episode take 10 MB.
 pub const STEP_CAP: u32 = 10_000_000;
@@ -130,37 +130,37 @@ pub fn step_cap() -> u32 {
     std::env::var("CHOPPERSCAPE_STEP_CAP").ok().and_then(|v| v.parse().ok()).unwrap_or(STEP_CAP)
 }
 
-/// Who flies: a built-in pilot by name, or a trained policy.
-pub enum Pilot<'a> {
-    /// A built-in pilot (`chopperscape::policy::NAMES`).
+/// Who plays: a built-in policy by name, or a trained policy.
+pub enum AnyPolicy<'a> {
+    /// A built-in policy (`chopperscape::policy::NAMES`).
     BuiltIn(&'a str),
     /// A trained policy; the env observes what it takes (its options were checked by [`Policy::check`]).
     Model(&'a mut Policy),
 }
 
-/// A pilot ready to act in one episode.
+/// A policy ready to act in one episode.
 enum Acting<'p> {
     BuiltIn(Box<dyn policy::Policy + Send + Sync>),
     Model(&'p mut Policy),
 }
 
-/// Plays one whole episode with `pilot`; a built-in one's own generator (for `random`) is seeded with `seed`
+/// Plays one whole episode with `policy`; a built-in one's own generator (for `random`) is seeded with `seed`
 /// too. `frame` sees the env after reset and after every step.
 ///
 /// # Errors
-/// An unknown pilot, a policy that fails, an error from `frame`, or an episode without a step limit that is
-/// still running after [`step_cap`] steps.
+/// An unknown built-in policy, a trained policy that fails, an error from `frame`, or an episode without a step
+/// limit that is still running after [`step_cap`] steps.
 pub fn play_policy(
     config: &Config,
-    pilot: &mut Pilot<'_>,
+    policy: &mut AnyPolicy<'_>,
     seed: u64,
     mut frame: impl FnMut(&ChopperScape) -> Result<()>,
 ) -> Result<EpisodeResult> {
-    let (mut runner, mut acting) = match pilot {
-        Pilot::BuiltIn(name) => {
+    let (mut runner, mut acting) = match policy {
+        AnyPolicy::BuiltIn(name) => {
             (Runner::new(config)?, Acting::BuiltIn(policy::by_name(name, seed, config).map_err(anyhow::Error::msg)?))
         }
-        Pilot::Model(model) => (Runner::observing(config)?, Acting::Model(model)),
+        AnyPolicy::Model(model) => (Runner::observing(config)?, Acting::Model(model)),
     };
     runner.reset(seed);
     frame(runner.env())?;
@@ -212,7 +212,7 @@ mod tests {
     #[test]
     fn replaying_a_policy_episode_reproduces_it() {
         let config = Config::default();
-        let played = play_policy(&config, &mut Pilot::BuiltIn("random"), 5, |_| Ok(())).unwrap();
+        let played = play_policy(&config, &mut AnyPolicy::BuiltIn("random"), 5, |_| Ok(())).unwrap();
         assert!(played.cause.is_some());
         assert_eq!(played.actions.len(), played.steps as usize);
         let replayed = replay_actions(&config, 5, &played.actions, |_| Ok(())).unwrap();
@@ -222,7 +222,7 @@ mod tests {
     #[test]
     fn actions_past_the_end_are_refused() {
         let config = Config::default();
-        let mut actions = play_policy(&config, &mut Pilot::BuiltIn("noop"), 1, |_| Ok(())).unwrap().actions;
+        let mut actions = play_policy(&config, &mut AnyPolicy::BuiltIn("noop"), 1, |_| Ok(())).unwrap().actions;
         actions.push(4);
         let err = replay_actions(&config, 1, &actions, |_| Ok(())).unwrap_err().to_string();
         assert!(err.contains("episode ended"), "{err}");

@@ -434,7 +434,7 @@ fn a_full_disk_names_the_file_it_could_not_write() {
 }
 
 #[test]
-fn dataset_refuses_pilot_flags_with_action_logs_before_running_python() {
+fn dataset_refuses_policy_flags_with_action_logs_before_running_python() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("a.json");
     std::fs::write(&log, "{}").unwrap();

@@ -12,7 +12,7 @@ fn main() {
 
 const STEPS: usize = 100_000;
 
-/// Actions from the random pilot, precomputed so the bench measures the env alone.
+/// Actions from the random policy, precomputed so the bench measures the env alone.
 fn actions() -> Vec<i64> {
     use chopperscape::policy::Policy;
     let mut p = RandomPolicy::new(1);

@@ -11,7 +11,7 @@
 //!   (features, or pixels from the [`render::Renderer`], stacked `frame_stack` deep). Its hot path
 //!   [`ChopperScape::step_into`] writes into a buffer the caller owns.
 //! - [`Snapshot`] clones and restores a whole environment, and encodes it to versioned bytes.
-//! - [`policy`] holds the built-in pilots: `random`, fixed actions, and the scripted `heuristic`.
+//! - [`policy`] holds the built-in policies: `random`, fixed actions, and the scripted `heuristic`.
 //!
 //! # Examples
 //! ```
@@ -40,8 +40,8 @@ pub mod export;
 pub mod features;
 mod geometry;
 pub mod limits;
-mod observation;
-mod observe;
+mod obs_buffer;
+mod obs_pipeline;
 pub mod policy;
 mod reachable;
 pub mod render;
@@ -56,8 +56,8 @@ pub use config::{BirdFuelCollision, Config, HudStyle, OPTION_NAMES, ObsType};
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;
-pub use observation::{ObsBufMut, ObsData, Observation};
-pub use observe::luma;
+pub use obs_buffer::{ObsBufMut, ObsData, Observation};
+pub use obs_pipeline::luma;
 pub use rng::Rng;
 pub use rules::{Game, Outcome};
 pub use snapshot::{SNAPSHOT_VERSION, Snapshot};

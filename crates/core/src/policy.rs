@@ -1,8 +1,9 @@
-//! Built-in pilots for demos, tests and baselines.
+//! Built-in policies for demos, tests and baselines. A policy picks an action from the world it sees; the
+//! trained ones (exported to ONNX) run in the `chopperscape-policy` crate.
 //!
 //! - `random`: a uniform action from the policy's own seeded generator (independent of the env's).
 //! - `right`, `left`, `down`, `up`, `noop`: one fixed action.
-//! - `heuristic`: a scripted pilot that plans in agent steps. An action it picks is held for `frame_skip`
+//! - `heuristic`: a scripted policy that plans in agent steps. An action it picks is held for `frame_skip`
 //!   underlying steps (ticks), so for each first action it tries every plan "this action for one agent step, then
 //!   hold one action" over the next `frame_skip + LOOKAHEAD − 1` ticks against the hazards' known motion (birds
 //!   and aliens 5 px left per tick, missiles 10, an alien's next missiles from when it fires), and scores the
@@ -26,10 +27,10 @@ use crate::world::World;
 /// Every built-in policy name, as `by_name` accepts it.
 pub const NAMES: &[&str] = &["random", "heuristic", "right", "left", "down", "up", "noop"];
 
-/// Ticks (underlying steps) the heuristic pilot looks ahead beyond its first agent step.
+/// Ticks (underlying steps) the heuristic policy looks ahead beyond its first agent step.
 pub const LOOKAHEAD: i32 = 32;
 
-/// A pilot: picks an action from the world it sees.
+/// A policy: picks an action from the world it sees.
 pub trait Policy {
     /// The action for this state.
     fn act(&mut self, world: &World) -> Action;
@@ -60,7 +61,7 @@ pub struct RandomPolicy {
 }
 
 impl RandomPolicy {
-    /// A random pilot whose generator is seeded with `seed`.
+    /// A random policy whose generator is seeded with `seed`.
     pub fn new(seed: u64) -> RandomPolicy {
         RandomPolicy { rng: Rng::seed_from_u64(seed) }
     }
@@ -82,7 +83,7 @@ impl Policy for Fixed {
     }
 }
 
-/// The scripted pilot (see the module docs).
+/// The scripted policy (see the module docs).
 #[derive(Clone, Copy, Debug)]
 pub struct Heuristic {
     /// Ticks an action is held for (the env's `frame_skip`).
@@ -97,14 +98,14 @@ pub struct Heuristic {
 }
 
 impl Default for Heuristic {
-    /// The pilot for the v0 rules (`frame_skip` 1, no sticky actions).
+    /// The heuristic for the v0 rules (`frame_skip` 1, no sticky actions).
     fn default() -> Heuristic {
         Heuristic::for_config(&Config::default())
     }
 }
 
 impl Heuristic {
-    /// The pilot for an env with these options.
+    /// The heuristic for an env with these options.
     pub fn for_config(config: &Config) -> Heuristic {
         let hold = i32::try_from(config.frame_skip).unwrap_or(i32::MAX).max(1);
         let sticky = config.sticky_prob > 0.0;
@@ -152,7 +153,7 @@ const MARGIN: i32 = 4;
 /// Extra pixels of clearance around aliens and missiles (which fire and fly faster than birds).
 const ALIEN_MARGIN: i32 = 8;
 /// Extra pixels of clearance under sticky actions at `frame_skip` 1 (divided by `frame_skip`): a sticky tick
-/// shifts the chopper 5 px off its plan, and at every tick the pilot would otherwise dodge at the last moment.
+/// shifts the chopper 5 px off its plan, and at every tick the heuristic would otherwise dodge at the last moment.
 const STICKY_MARGIN: i32 = 12;
 /// Most hazards the heuristic tracks (the rest are ignored; the screen rarely holds more).
 const MAX_HAZARDS: usize = 32;
@@ -253,7 +254,7 @@ impl Hazards {
     }
 }
 
-/// Distance cost to where the pilot wants to be: a reachable fuel tank when fuel is below half, else home.
+/// Distance cost to where the heuristic wants to be: a reachable fuel tank when fuel is below half, else home.
 fn attraction(world: &World, at: &Rect) -> f32 {
     let (cx, cy) = at.centre2();
     let (cx, cy) = (cx as f32 / 2.0, cy as f32 / 2.0);

@@ -12,7 +12,7 @@ use crate::action::Action;
 use crate::config::{Config, ObsType};
 use crate::consts::*;
 use crate::geometry::Rect;
-use crate::observation::ObsData;
+use crate::obs_buffer::ObsData;
 use crate::world::{Cause, Status, World};
 
 /// Birds (or aliens) on screen at most: one per position of their flight, `768/5 + 1`.

@@ -27,8 +27,8 @@ use crate::consts::{ALIEN_SIZE, BIRD_SIZE, CHOPPER_SIZE, FUEL_TANK_SIZE, MISSILE
 use crate::env::ChopperScape;
 use crate::error::{Error, SnapshotError};
 use crate::geometry::Rect;
-use crate::observation::ObsData;
-use crate::observe::stacked_len;
+use crate::obs_buffer::ObsData;
+use crate::obs_pipeline::stacked_len;
 use crate::reachable::{MAX_BIRDS, MAX_FUEL_TANKS, MAX_MISSILES, check_stacked, check_world};
 use crate::rng::Rng;
 use crate::rules::Game;

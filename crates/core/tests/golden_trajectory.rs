@@ -10,14 +10,14 @@ use std::fmt::Write;
 /// Plays the golden episodes and prints one line per step.
 fn trajectory(name: &str, config: Config, seed: u64, policy_name: &str) -> String {
     let mut out = String::new();
-    let mut pilot = policy::by_name(policy_name, seed, &config).unwrap();
+    let mut policy = policy::by_name(policy_name, seed, &config).unwrap();
     let mut env = ChopperScape::new(config).unwrap();
     let (obs, info) = env.reset(Some(seed));
     let bytes: Vec<u8> = obs.as_f32().unwrap().iter().flat_map(|v| v.to_le_bytes()).collect();
     writeln!(out, "# {name}: seed {seed}, policy {policy_name}").unwrap();
     writeln!(out, "reset fuel={} lives={} obs={:08x}", info.fuel, info.lives, crc32fast::hash(&bytes)).unwrap();
     loop {
-        let action = pilot.act(env.world()) as i64;
+        let action = policy.act(env.world()) as i64;
         let s = env.step(action).unwrap();
         let bytes: Vec<u8> = s.observation.as_f32().unwrap().iter().flat_map(|v| v.to_le_bytes()).collect();
         let cause = s.info.cause.map_or("-", |c| c.as_str());
@@ -54,7 +54,7 @@ fn check(file: &str, actual: String) {
 }
 
 #[test]
-fn v0_random_pilot_replays_bit_for_bit() {
+fn v0_random_policy_replays_bit_for_bit() {
     check("trajectory_v0_random_seed42.txt", trajectory("v0", Config::features(), 42, "random"));
 }
 

@@ -21,9 +21,9 @@ fn check(config: Config, steps: usize, switch_every: usize, buffers: usize) {
     let mut bufs = vec![vec![0u8; n]; buffers];
     copying.reset_into(Some(11), ObsBufMut::U8(&mut expected)).unwrap();
     drawing.reset_into(Some(11), ObsBufMut::U8(&mut bufs[0])).unwrap();
-    let mut pilot = RandomPolicy::new(3);
+    let mut policy = RandomPolicy::new(3);
     for i in 0..steps {
-        let a = pilot.act(copying.world()) as i64;
+        let a = policy.act(copying.world()) as i64;
         let which = (i / switch_every) % buffers;
         let t1 = copying.step_into(a, ObsBufMut::U8(&mut expected)).unwrap();
         let t2 = drawing.step_into_incremental(a, ObsBufMut::U8(&mut bufs[which])).unwrap();

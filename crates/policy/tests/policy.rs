@@ -54,7 +54,7 @@ fn a_features_policy_plays_an_episode_to_its_end() {
         }
         obs = step.observation;
     }
-    // The trained pilot survives the first 300 steps of seed 0.
+    // The trained policy survives the first 300 steps of seed 0.
     assert_eq!(steps, 300);
 }
 

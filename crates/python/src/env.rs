@@ -163,7 +163,7 @@ impl PyEnv {
 }
 
 impl PyEnv {
-    /// The core env (for the pilots, which read its world).
+    /// The core env (for the built-in policies, which read its world).
     pub(crate) fn core(&self) -> &ChopperScape {
         &self.env
     }

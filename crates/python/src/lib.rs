@@ -15,7 +15,7 @@ mod env;
 mod errors;
 mod obs;
 mod options;
-mod pilots;
+mod policies;
 mod vector;
 
 use pyo3::prelude::*;
@@ -32,7 +32,7 @@ mod _core {
     #[pymodule_export]
     use super::options::option_value;
     #[pymodule_export]
-    use super::pilots::{PyPilot, PyVectorPilot};
+    use super::policies::{PyPolicy, PyVectorPolicy};
     #[pymodule_export]
     use super::vector::PyVectorEnv;
 
@@ -45,7 +45,7 @@ mod _core {
         m.add("FEATURES_VERSION", chopperscape::features::FEATURES_VERSION)?;
         m.add("PIXELS_VERSION", chopperscape::render::PIXELS_VERSION)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
-        m.add("PILOT_NAMES", chopperscape::policy::NAMES.to_vec())?;
+        m.add("POLICY_NAMES", chopperscape::policy::NAMES.to_vec())?;
         m.add("MAX_ENV_BYTES", chopperscape::limits::MAX_ENV_BYTES)?;
         m.add("MAX_BATCH_BYTES", chopperscape_vector::MAX_BATCH_BYTES)?;
         m.add("MAX_THREADS", chopperscape_vector::MAX_THREADS)?;

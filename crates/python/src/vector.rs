@@ -310,7 +310,7 @@ impl PyVectorEnv {
 }
 
 impl PyVectorEnv {
-    /// The core batch (for the pilots, which read each env's world).
+    /// The core batch (for the built-in policies, which read each env's world).
     pub(crate) fn core(&self) -> &VectorEnv {
         &self.inner
     }

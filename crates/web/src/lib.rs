@@ -37,7 +37,7 @@ pub struct StepResult {
     pub cause: Option<String>,
 }
 
-/// One game of ChopperScape-v0 with the page's options, its frame, and the heuristic pilot.
+/// One game of ChopperScape-v0 with the page's options, its frame, and the heuristic policy.
 #[wasm_bindgen]
 pub struct Game {
     session: Session,
@@ -98,9 +98,9 @@ impl Game {
         })
     }
 
-    /// The action the heuristic pilot picks now.
-    pub fn pilot_action(&mut self) -> i32 {
-        self.session.pilot_action().index() as i32
+    /// The action the heuristic policy picks now.
+    pub fn heuristic_action(&mut self) -> i32 {
+        self.session.heuristic_action().index() as i32
     }
 
     /// Address in `memory.buffer` of the RGBA frame (600 × 800 × 4, opaque).

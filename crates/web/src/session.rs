@@ -1,4 +1,4 @@
-//! What the page drives, in plain Rust: one environment, its frame buffers, the heuristic pilot and, when the
+//! What the page drives, in plain Rust: one environment, its frame buffers, the heuristic policy and, when the
 //! page loaded one, a trained policy (`chopperscape-policy`, the same code as `chopperscape demo --policy`).
 //!
 //! Nothing here touches JavaScript, so it is tested natively; `lib.rs` only maps it to `wasm-bindgen`.
@@ -19,7 +19,8 @@ pub const PAGE_OPTIONS: &[&str] =
 /// One game as the page plays it.
 pub struct Session {
     env: ChopperScape,
-    pilot: Box<dyn Policy + Send>,
+    /// The built-in heuristic policy, which flies when the page is asked to watch.
+    heuristic: Box<dyn Policy + Send>,
     /// The trained policy, if the page loaded one.
     agent: Option<chopperscape_policy::Policy>,
     /// The observation `step_into` writes: features, the cheapest, which a trained policy reads.
@@ -74,19 +75,19 @@ impl Session {
             agent.check(&config).map_err(|e| e.to_string())?;
         }
         let env = ChopperScape::new(config).map_err(|e| e.to_string())?;
-        let pilot = heuristic(env.config());
+        let heuristic = heuristic(env.config());
         let space = env.observation_space();
         let obs = Observation::zeros(space.shape.clone(), space.dtype);
         let mut rgba = vec![0; FRAME_HEIGHT * FRAME_WIDTH * 4];
         // Alpha never changes: the frame is opaque.
         rgba.chunks_exact_mut(4).for_each(|px| px[3] = 255);
-        Ok(Session { env, pilot, agent, obs, rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3], rgba })
+        Ok(Session { env, heuristic, agent, obs, rgb: vec![0; FRAME_HEIGHT * FRAME_WIDTH * 3], rgba })
     }
 
     /// Starts an episode from `seed` and draws its first frame.
     pub fn reset(&mut self, seed: u64) {
         self.env.reset_into(Some(seed), self.obs.as_buf_mut()).expect("the observation buffer fits");
-        self.pilot = heuristic(self.env.config());
+        self.heuristic = heuristic(self.env.config());
         self.draw();
     }
 
@@ -100,9 +101,9 @@ impl Session {
         Ok(t)
     }
 
-    /// The action the heuristic pilot picks for the current state.
-    pub fn pilot_action(&mut self) -> Action {
-        self.pilot.act(self.env.world())
+    /// The action the heuristic policy picks for the current state.
+    pub fn heuristic_action(&mut self) -> Action {
+        self.heuristic.act(self.env.world())
     }
 
     /// The action the trained policy picks for the current observation (greedy), if a policy flies.
@@ -148,7 +149,7 @@ impl Session {
 }
 
 fn heuristic(config: &Config) -> Box<dyn Policy + Send> {
-    policy::by_name("heuristic", 0, config).expect("the heuristic pilot is built in")
+    policy::by_name("heuristic", 0, config).expect("the heuristic policy is built in")
 }
 
 #[cfg(test)]
@@ -260,13 +261,13 @@ mod tests {
     }
 
     #[test]
-    fn pilot_flies_the_same_way_from_the_same_seed() {
+    fn heuristic_flies_the_same_way_from_the_same_seed() {
         let run = || {
             let mut s = session(&[]);
             s.reset(9);
             let mut path = Vec::new();
             while !s.is_over() && path.len() < 60 {
-                let a = s.pilot_action();
+                let a = s.heuristic_action();
                 s.step(a as i64).unwrap();
                 path.push((s.world().chopper.x, s.world().chopper.y));
             }
@@ -274,6 +275,6 @@ mod tests {
         };
         let (a, b) = (run(), run());
         assert_eq!(a, b);
-        assert!(a.windows(2).any(|w| w[0] != w[1]), "the pilot moves the chopper");
+        assert!(a.windows(2).any(|w| w[0] != w[1]), "the heuristic moves the chopper");
     }
 }

@@ -122,11 +122,11 @@ fn build_note() -> &'static str {
     if cfg!(debug_assertions) { " (debug build: use --release for real numbers)" } else { "" }
 }
 
-/// A fixed pseudo-random action sequence (the random pilot's, seed 0).
+/// A fixed pseudo-random action sequence (the random policy's, seed 0).
 fn actions(n: usize) -> Vec<i64> {
-    let mut pilot = RandomPolicy::new(0);
+    let mut policy = RandomPolicy::new(0);
     let world = World::default();
-    (0..n).map(|_| pilot.act(&world) as i64).collect()
+    (0..n).map(|_| policy.act(&world) as i64).collect()
 }
 
 fn config_for(name: &str, base: &Config) -> Config {

@@ -1,4 +1,4 @@
-//! `chopperscape dataset`: episodes of a built-in pilot (or replayed action logs) as a Minari dataset.
+//! `chopperscape dataset`: episodes of a built-in policy (or replayed action logs) as a Minari dataset.
 //!
 //! Minari's on-disk format (HDF5 plus JSON metadata) is written by Minari's own Python classes, so this command
 //! runs the Python package: `python -m chopperscape.datasets` with the same arguments. It needs the `chopperscape`
@@ -7,7 +7,7 @@
 //!
 //! The child stops with this process: SIGINT, SIGTERM or SIGHUP is passed on to it and waited for (it removes its
 //! unfinished dataset itself), and if this process is killed outright the child gets SIGTERM (Linux). Its exit
-//! status is this command's. Defaults (`features` observations, the heuristic pilot, one episode, seed 0) are
+//! status is this command's. Defaults (`features` observations, the heuristic policy, one episode, seed 0) are
 //! the Python module's own, so there is one of each.
 
 use std::path::PathBuf;
@@ -16,7 +16,7 @@ use std::process::{Command, ExitCode, ExitStatus, Stdio};
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::pilot_name_parser;
+use super::policy_name_parser;
 use crate::interrupt::{self, Cleanup};
 use crate::options::GameOptions;
 use crate::usage_bail;
@@ -26,7 +26,7 @@ pub const PYTHON_VAR: &str = "CHOPPERSCAPE_PYTHON";
 
 /// Write a Minari dataset of ChopperScape-v0 episodes (needs the chopperscape Python package and minari).
 ///
-/// Episode i is played from seed S+i with the pilot seeded S+i, exactly as `demo` plays it. The dataset goes
+/// Episode i is played from seed S+i with the policy seeded S+i, exactly as `demo` plays it. The dataset goes
 /// under MINARI_DATASETS_PATH (default ~/.minari/datasets), where `minari.load_dataset(NAME)` finds it; an
 /// existing dataset is never overwritten. The work is done by `python -m chopperscape.datasets` in the
 /// interpreter named by CHOPPERSCAPE_PYTHON (default python3), which needs `pip install chopperscape
@@ -39,8 +39,8 @@ pub struct DatasetArgs {
     /// The dataset id, `namespace/name-vN` (or `name-vN`)
     #[arg(long, value_name = "NAME")]
     pub out: String,
-    /// The pilot: random, heuristic, or a fixed action (right, left, down, up, noop) [default: heuristic]
-    #[arg(long, value_parser = pilot_name_parser(), conflicts_with = "from_logs")]
+    /// The policy: random, heuristic, or a fixed action (right, left, down, up, noop) [default: heuristic]
+    #[arg(long, value_parser = policy_name_parser(), conflicts_with = "from_logs")]
     pub policy: Option<String>,
     /// Number of episodes, at least 1 [default: 1]
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..), conflicts_with = "from_logs")]
@@ -60,7 +60,7 @@ pub struct DatasetArgs {
     /// Leave the HUD out of pixel observations
     #[arg(long)]
     pub no_hud: bool,
-    /// Replay these action logs (`play --save-actions`) instead of a pilot; the rules come from the logs
+    /// Replay these action logs (`play --save-actions`) instead of a policy; the rules come from the logs
     #[arg(long, value_name = "LOG", num_args = 1..)]
     pub from_logs: Vec<PathBuf>,
     #[command(flatten)]

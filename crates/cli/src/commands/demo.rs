@@ -1,4 +1,4 @@
-//! `chopperscape demo`: watch a built-in pilot or a trained policy play, headless or in a window, and record it.
+//! `chopperscape demo`: watch a built-in or a trained policy play, headless or in a window, and record it.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,7 +8,7 @@ use chopperscape::Config;
 use clap::{Args, ValueEnum};
 use serde_json::json;
 
-use super::{PolicyArg, Tally, pilot_and_config, policy_parser, table_header, table_row};
+use super::{PolicyArg, Tally, policy_and_config, policy_parser, table_header, table_row};
 use crate::episode::{EpisodeResult, play_policy, replay_actions};
 use crate::media::{Recorder, open_video};
 use crate::options::GameOptions;
@@ -29,11 +29,11 @@ pub enum Render {
     None,
 }
 
-/// Watch a built-in pilot or a trained policy play ChopperScape-v0.
+/// Watch a built-in or a trained policy play ChopperScape-v0.
 ///
-/// With no arguments: one episode of the random pilot with seed 0, recorded to chopperscape-demo.gif in the
+/// With no arguments: one episode of the random policy with seed 0, recorded to chopperscape-demo.gif in the
 /// current folder (that default file is replaced on every run; a file named with --out is never overwritten
-/// without --force). Episodes use seeds S, S+1, …; the random pilot's own generator is seeded from the
+/// without --force). Episodes use seeds S, S+1, …; the random policy's own generator is seeded from the
 /// episode's seed too, so every run with the same flags is identical. A trained policy (--policy NAME.onnx,
 /// from python -m chopperscape.export) plays greedily under the options it was trained with; a game option
 /// given here that changes one of them is used, with a warning.
@@ -45,9 +45,9 @@ chopperscape demo --policy models/ppo-features.onnx --episodes 10 --json\n\n\
 With --json, each episode prints one line:\n  \
 {\"episode\": 0, \"seed\": 0, \"steps\": 312, \"return\": 302, \"cause\": \"bird\"}")]
 pub struct DemoArgs {
-    /// The pilot: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
+    /// The policy: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
     /// exported by python -m chopperscape.export (NAME.onnx)
-    #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "PILOT|FILE.onnx")]
+    #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "NAME|FILE.onnx")]
     pub policy: PolicyArg,
     /// Number of episodes, at least 1
     #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..))]
@@ -91,7 +91,7 @@ pub fn run(args: DemoArgs) -> Result<ExitCode> {
         crate::media::Format::from_path(&out)?;
         crate::output::check_free(&out, force)?;
     }
-    let (mut pilot, config) = pilot_and_config(&args.policy, &args.options)?;
+    let (mut policy, config) = policy_and_config(&args.policy, &args.options)?;
 
     let bar = progress::bar(u64::from(args.episodes), "playing", args.json);
     // Only a recording or a window replays the episodes; otherwise nothing of them is kept but the tally.
@@ -102,7 +102,7 @@ pub fn run(args: DemoArgs) -> Result<ExitCode> {
         bar.suspend(|| crate::say!("{}", table_header()))?;
     }
     for i in 0..u64::from(args.episodes) {
-        let e = play_policy(&config, &mut pilot.pilot(), args.seed.wrapping_add(i), |_| Ok(()))?;
+        let e = play_policy(&config, &mut policy.as_any(), args.seed.wrapping_add(i), |_| Ok(()))?;
         tally.add(&e);
         let line = if args.json {
             json!({"episode": i, "seed": e.seed, "steps": e.steps, "return": e.ret, "cause": e.cause}).to_string()

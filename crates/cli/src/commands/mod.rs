@@ -15,25 +15,25 @@ use chopperscape::Config;
 use chopperscape_policy::Policy;
 use clap::builder::PossibleValuesParser;
 
-use crate::episode::{EpisodeResult, Pilot};
+use crate::episode::{AnyPolicy, EpisodeResult};
 use crate::options::GameOptions;
 use crate::usage_bail;
 
-/// A clap parser for the built-in pilot names only (`dataset`).
-pub fn pilot_name_parser() -> PossibleValuesParser {
+/// A clap parser for the built-in policy names only (`dataset`).
+pub fn policy_name_parser() -> PossibleValuesParser {
     PossibleValuesParser::new(chopperscape::policy::NAMES)
 }
 
-/// What `--policy` names: a built-in pilot, or a trained policy exported by `python -m chopperscape.export`.
+/// What `--policy` names: a built-in policy, or a trained policy exported by `python -m chopperscape.export`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PolicyArg {
-    /// A built-in pilot (`chopperscape::policy::NAMES`).
+    /// A built-in policy (`chopperscape::policy::NAMES`).
     BuiltIn(String),
     /// An ONNX policy file.
     Model(PathBuf),
 }
 
-/// A clap parser for `--policy`: a built-in pilot's name is always the pilot (a file of that name is `./NAME`);
+/// A clap parser for `--policy`: a built-in policy's name is always that policy (a file of that name is `./NAME`);
 /// anything ending in `.onnx` or holding a `/` is a policy file.
 pub fn policy_parser(s: &str) -> Result<PolicyArg, String> {
     let names = chopperscape::policy::NAMES;
@@ -43,7 +43,7 @@ pub fn policy_parser(s: &str) -> Result<PolicyArg, String> {
         Ok(PolicyArg::Model(PathBuf::from(s)))
     } else {
         Err(format!(
-            "{s:?} is not a pilot: give one of {}, or an exported policy file (NAME.onnx, from python -m \
+            "{s:?} is not a built-in policy: give one of {}, or an exported policy file (NAME.onnx, from python -m \
              chopperscape.export)",
             names.join(", ")
         ))
@@ -60,34 +60,36 @@ impl PolicyArg {
     }
 }
 
-/// A pilot ready to fly: a built-in one, or a loaded policy.
-pub enum LoadedPilot {
-    /// A built-in pilot by name.
+/// A policy ready to play: a built-in one, or a loaded trained one.
+pub enum LoadedPolicy {
+    /// A built-in policy by name.
     BuiltIn(String),
     /// A trained policy.
     Model(Box<Policy>),
 }
 
-impl LoadedPilot {
-    /// The pilot as `episode::play_policy` takes it.
-    pub fn pilot(&mut self) -> Pilot<'_> {
+impl LoadedPolicy {
+    /// The policy as `episode::play_policy` takes it.
+    pub fn as_any(&mut self) -> AnyPolicy<'_> {
         match self {
-            LoadedPilot::BuiltIn(name) => Pilot::BuiltIn(name),
-            LoadedPilot::Model(policy) => Pilot::Model(policy),
+            LoadedPolicy::BuiltIn(name) => AnyPolicy::BuiltIn(name),
+            LoadedPolicy::Model(policy) => AnyPolicy::Model(policy),
         }
     }
 }
 
-/// The pilot `--policy` names and the options to play it under. A built-in pilot plays the v0 rules with the
-/// flags given; a policy plays the options it was trained with (its metadata), each flag that changes one of
-/// its rules said on stderr, and is refused (exit 2, naming both) if the env would not give the observation it
-/// takes.
+/// The policy `--policy` names and the options to play it under. A built-in policy plays the v0 rules with the
+/// flags given; a trained policy plays the options it was trained with (its metadata), each flag that changes
+/// one of its rules said on stderr, and is refused (exit 2, naming both) if the env would not give the
+/// observation it takes.
 ///
 /// # Errors
 /// A policy file that cannot be loaded, or options that do not fit it: [`crate::UsageError`].
-pub fn pilot_and_config(arg: &PolicyArg, options: &GameOptions) -> Result<(LoadedPilot, Config)> {
+pub fn policy_and_config(arg: &PolicyArg, options: &GameOptions) -> Result<(LoadedPolicy, Config)> {
     let path = match arg {
-        PolicyArg::BuiltIn(name) => return Ok((LoadedPilot::BuiltIn(name.clone()), options.apply(Config::default())?)),
+        PolicyArg::BuiltIn(name) => {
+            return Ok((LoadedPolicy::BuiltIn(name.clone()), options.apply(Config::default())?));
+        }
         PolicyArg::Model(path) => path,
     };
     let policy = match Policy::load(path) {
@@ -114,7 +116,7 @@ pub fn pilot_and_config(arg: &PolicyArg, options: &GameOptions) -> Result<(Loade
     if let Err(e) = policy.check(&played) {
         usage_bail!("--policy {}: {e}", path.display());
     }
-    Ok((LoadedPilot::Model(Box::new(policy)), played))
+    Ok((LoadedPolicy::Model(Box::new(policy)), played))
 }
 
 /// A clap parser for a seed, whose message gives the range.

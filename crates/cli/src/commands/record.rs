@@ -1,4 +1,4 @@
-//! `chopperscape record`: one episode of a built-in pilot or a trained policy to a video, a folder of frames, or
+//! `chopperscape record`: one episode of a built-in or a trained policy to a video, a folder of frames, or
 //! an action log.
 
 use std::path::{Path, PathBuf};
@@ -7,13 +7,13 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 
-use super::{PolicyArg, pilot_and_config, policy_parser, table_header, table_row};
+use super::{PolicyArg, policy_and_config, policy_parser, table_header, table_row};
 use crate::episode::play_policy;
 use crate::options::GameOptions;
 use crate::output::{PendingDir, check_free};
 use crate::{actionlog, output, progress, usage_bail};
 
-/// Record one episode of a built-in pilot or a trained policy.
+/// Record one episode of a built-in or a trained policy.
 ///
 /// The episode is played headless first, then replayed to draw its frames (it is deterministic), so the
 /// progress bar knows its length. A trained policy (--policy NAME.onnx, from python -m chopperscape.export)
@@ -26,11 +26,11 @@ chopperscape record --policy random --seed 1 --out run.mp4 --save-actions run.js
 chopperscape record --policy heuristic --frames frames/\n  \
 chopperscape record --policy models/ppo-features.onnx --seed 3 --out agent.gif")]
 pub struct RecordArgs {
-    /// The pilot: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
+    /// The policy: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
     /// exported by python -m chopperscape.export (NAME.onnx)
-    #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "PILOT|FILE.onnx")]
+    #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "NAME|FILE.onnx")]
     pub policy: PolicyArg,
-    /// Seed of the episode (and of the random pilot's own generator)
+    /// Seed of the episode (and of the random policy's own generator)
     #[arg(long, default_value_t = 0, allow_negative_numbers = true, value_parser = super::seed_parser)]
     pub seed: u64,
     #[command(flatten)]
@@ -96,9 +96,9 @@ pub fn run(args: RecordArgs) -> Result<ExitCode> {
         usage_bail!("nothing to record: give --out FILE, --frames DIR or --save-actions FILE");
     }
     o.check(None)?;
-    let (mut pilot, config) = pilot_and_config(&args.policy, &args.options)?;
+    let (mut policy, config) = policy_and_config(&args.policy, &args.options)?;
     let counter = progress::counter("playing", false);
-    let episode = play_policy(&config, &mut pilot.pilot(), args.seed, |env| {
+    let episode = play_policy(&config, &mut policy.as_any(), args.seed, |env| {
         let steps = env.world().steps;
         if steps % 1024 == 0 {
             counter.set_position(u64::from(steps));

@@ -69,7 +69,7 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
         crate::say!(
             "{} ({} playing) reproduces: {} steps, return {}, end {}",
             args.file.display(),
-            log.policy.as_deref().unwrap_or("unknown pilot"),
+            log.policy.as_deref().unwrap_or("unknown policy"),
             got.steps,
             got.ret,
             got.cause.unwrap_or("running (stopped before the end)")

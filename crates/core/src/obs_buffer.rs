@@ -1,5 +1,5 @@
-//! Observations: owned ([`Observation`]) for convenience, or written into a caller-owned buffer
-//! ([`ObsBufMut`]) on the hot path.
+//! Where an observation is stored: owned ([`Observation`]) for convenience, or a caller-owned buffer
+//! ([`ObsBufMut`]) written on the hot path. What goes into them is made by the pipeline in `obs_pipeline.rs`.
 
 use crate::spaces::Dtype;
 

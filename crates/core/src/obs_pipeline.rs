@@ -1,4 +1,5 @@
-//! Turns a [`World`] into the observation the agent sees: features or pixels, stacked `frame_stack` deep.
+//! The observation pipeline: turns a [`World`] into the observation the agent sees (features or pixels, stacked
+//! `frame_stack` deep) and writes it into the buffers of `obs_buffer.rs`.
 //!
 //! Stacking concatenates on the last axis, oldest first: `rgb` `(H, W, 3k)`, `rgb_float` `(H, W, 3k)`,
 //! `grayscale` `(H, W, k)` (no extra axis when `k = 1`: `(H, W)`), `features` `(46k,)`. Reset fills the
@@ -17,7 +18,7 @@ use crate::config::{Config, ObsType};
 use crate::error::{ConfigError, Error};
 use crate::features::{self, FEATURES_LEN};
 use crate::limits::try_filled;
-use crate::observation::{ObsBufMut, ObsData};
+use crate::obs_buffer::{ObsBufMut, ObsData};
 use crate::render::{Hud, HudScale, PixelFormat, Renderer};
 use crate::spaces::{BoxSpace, Dtype};
 use crate::world::World;

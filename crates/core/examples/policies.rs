@@ -1,5 +1,5 @@
-//! Plays episodes with a built-in pilot and prints steps, return and cause of each, then the mean ± std return:
-//! `cargo run --release -p chopperscape-core --example pilots -- heuristic 20 [option=value …]`
+//! Plays episodes with a built-in policy and prints steps, return and cause of each, then the mean ± std return:
+//! `cargo run --release -p chopperscape-core --example policies -- heuristic 20 [option=value …]`
 //! (options as `Config::set` names them, e.g. `frame_skip=4 sticky_prob=0.25`; seeds 0, 1, …).
 use chopperscape::{Config, Game, Status, policy};
 

@@ -1,7 +1,7 @@
-//! `chopperscape._core.Pilot` and `chopperscape._core.VectorPilot`: the built-in pilots of
+//! `chopperscape._core.Policy` and `chopperscape._core.VectorPolicy`: the built-in policies of
 //! [`chopperscape::policy`], reading the world of an env of this module (never a Python-side copy of it).
 //!
-//! A pilot is made by name; the heuristic plans for the options of the env it flies (its `frame_skip` and
+//! A policy is made by name; the heuristic plans for the options of the env it plays (its `frame_skip` and
 //! `sticky_prob`), so it is built for an env's options the first time it sees that env, and rebuilt when it
 //! sees an env with other options. `random` draws from its own generator, seeded as the CLI's `demo` seeds it.
 
@@ -17,16 +17,16 @@ use crate::env::PyEnv;
 use crate::errors::{config_error, in_use};
 use crate::vector::PyVectorEnv;
 
-/// Heap bytes one pilot may take beside its [`Built`]: its boxed policy (the largest, `random`'s generator,
+/// Heap bytes one policy may take beside its [`Built`]: its boxed policy (the largest, `random`'s generator,
 /// is 40 bytes), its name, and the options it plans for (kept inline). Generous, so the budget is an upper bound.
-const PILOT_HEAP_BYTES: u64 = 128;
+const POLICY_HEAP_BYTES: u64 = 128;
 
-/// The memory `num_envs` pilots take: what a `VectorPilot` is checked against before anything is allocated.
-fn pilots_bytes(num_envs: usize) -> u64 {
-    (std::mem::size_of::<Built>() as u64 + PILOT_HEAP_BYTES).saturating_mul(num_envs as u64)
+/// The memory `num_envs` policies take: what a `VectorPolicy` is checked against before anything is allocated.
+fn policies_bytes(num_envs: usize) -> u64 {
+    (std::mem::size_of::<Built>() as u64 + POLICY_HEAP_BYTES).saturating_mul(num_envs as u64)
 }
 
-/// One pilot by name, and the options it was built for.
+/// One built-in policy by name, and the options it was built for.
 struct Built {
     name: String,
     seed: u64,
@@ -56,19 +56,19 @@ impl Built {
     }
 }
 
-/// A built-in pilot for one `chopperscape._core.Env`: `random` (seeded), `heuristic`, or a fixed action
+/// A built-in policy for one `chopperscape._core.Env`: `random` (seeded), `heuristic`, or a fixed action
 /// (`right`, `left`, `down`, `up`, `noop`).
-#[pyclass(name = "Pilot", module = "chopperscape._core")]
-pub(crate) struct PyPilot {
+#[pyclass(name = "Policy", module = "chopperscape._core")]
+pub(crate) struct PyPolicy {
     inner: Built,
 }
 
 #[pymethods]
-impl PyPilot {
+impl PyPolicy {
     #[new]
     #[pyo3(signature = (name, seed = 0))]
-    fn new(name: &str, seed: u64) -> PyResult<PyPilot> {
-        Ok(PyPilot { inner: Built::new(name, seed)? })
+    fn new(name: &str, seed: u64) -> PyResult<PyPolicy> {
+        Ok(PyPolicy { inner: Built::new(name, seed)? })
     }
 
     /// The action (0..=4) for the env's current state. While another thread is inside a call on the env, the
@@ -86,7 +86,7 @@ impl PyPilot {
         self.inner.reseed(seed.unwrap_or(self.inner.seed));
     }
 
-    /// The pilot's name.
+    /// The policy's name.
     #[getter]
     fn name(&self) -> &str {
         &self.inner.name
@@ -99,92 +99,92 @@ impl PyPilot {
     }
 }
 
-/// One pilot per environment of a `chopperscape._core.VectorEnv`; pilot `i` is seeded `seed + i`, as the
+/// One built-in policy per environment of a `chopperscape._core.VectorEnv`; policy `i` is seeded `seed + i`, as the
 /// environment `i` of a batch reset with `seed`. `act` computes the whole batch's actions with the GIL released.
-#[pyclass(name = "VectorPilot", module = "chopperscape._core")]
-pub(crate) struct PyVectorPilot {
-    pilots: Vec<Built>,
+#[pyclass(name = "VectorPolicy", module = "chopperscape._core")]
+pub(crate) struct PyVectorPolicy {
+    policies: Vec<Built>,
     seed: u64,
 }
 
 #[pymethods]
-impl PyVectorPilot {
+impl PyVectorPolicy {
     #[new]
     #[pyo3(signature = (name, num_envs, seed = 0))]
-    fn new(name: &str, num_envs: usize, seed: u64) -> PyResult<PyVectorPilot> {
+    fn new(name: &str, num_envs: usize, seed: u64) -> PyResult<PyVectorPolicy> {
         if num_envs == 0 {
             return Err(PyValueError::new_err("invalid value 0 for option `num_envs`: allowed an integer >= 1"));
         }
         let first = Built::new(name, seed)?;
         // The batch's memory budget, checked (and asked of the system) before anything is allocated.
-        let what = format!("{num_envs} pilots");
-        let needed = pilots_bytes(num_envs);
-        check_budget(what.clone(), needed, MAX_BATCH_BYTES, "fly fewer environments").map_err(config_error)?;
+        let what = format!("{num_envs} policies");
+        let needed = policies_bytes(num_envs);
+        check_budget(what.clone(), needed, MAX_BATCH_BYTES, "play fewer environments").map_err(config_error)?;
         probe(needed, &what).map_err(config_error)?;
-        let mut pilots = Vec::new();
-        pilots
+        let mut policies = Vec::new();
+        policies
             .try_reserve_exact(num_envs)
             .map_err(|_| config_error(chopperscape::ConfigError::OutOfMemory { what: what.clone(), needed }))?;
-        pilots.push(first);
+        policies.push(first);
         for i in 1..num_envs as u64 {
-            pilots.push(Built::new(name, seed.wrapping_add(i))?);
+            policies.push(Built::new(name, seed.wrapping_add(i))?);
         }
-        Ok(PyVectorPilot { pilots, seed })
+        Ok(PyVectorPolicy { policies, seed })
     }
 
     /// The `num_envs` actions (`int64`) for the batch's current states. An environment whose next step is an
-    /// autoreset (its action is ignored) gets 4 (Do Nothing), and its pilot draws nothing for it.
+    /// autoreset (its action is ignored) gets 4 (Do Nothing), and its policy draws nothing for it.
     fn act<'py>(&mut self, py: Python<'py>, envs: &Bound<'py, PyVectorEnv>) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let envs = envs.try_borrow().map_err(in_use)?;
         let inner = envs.core();
-        if inner.num_envs() != self.pilots.len() {
+        if inner.num_envs() != self.policies.len() {
             return Err(PyValueError::new_err(format!(
-                "the vector env has {} environments but this pilot flies {}: make the pilot with num_envs={}",
+                "the vector env has {} environments but this policy plays {}: make the policy with num_envs={}",
                 inner.num_envs(),
-                self.pilots.len(),
+                self.policies.len(),
                 inner.num_envs()
             )));
         }
-        let pilots = &mut self.pilots;
+        let policies = &mut self.policies;
         let actions: Vec<i64> = py.detach(|| {
-            pilots
+            policies
                 .iter_mut()
                 .enumerate()
-                .map(|(i, pilot)| {
+                .map(|(i, policy)| {
                     if inner.pending_reset(i) {
                         return Action::Noop as i64;
                     }
                     let env = inner.env(i);
-                    pilot.fit(env.config());
-                    pilot.policy.act(env.world()) as i64
+                    policy.fit(env.config());
+                    policy.policy.act(env.world()) as i64
                 })
                 .collect()
         });
         Ok(PyArray1::from_vec(py, actions))
     }
 
-    /// Starts over as if new with `seed` (`None`: the seed it has): pilot `i` is seeded `seed + i`.
+    /// Starts over as if new with `seed` (`None`: the seed it has): policy `i` is seeded `seed + i`.
     #[pyo3(signature = (seed = None))]
     fn reset(&mut self, seed: Option<u64>) {
         self.seed = seed.unwrap_or(self.seed);
-        for (i, p) in self.pilots.iter_mut().enumerate() {
+        for (i, p) in self.policies.iter_mut().enumerate() {
             p.reseed(self.seed.wrapping_add(i as u64));
         }
     }
 
-    /// The pilots' name.
+    /// The policies' name.
     #[getter]
     fn name(&self) -> &str {
-        &self.pilots[0].name
+        &self.policies[0].name
     }
 
-    /// Number of environments it flies.
+    /// Number of environments it plays.
     #[getter]
     fn num_envs(&self) -> usize {
-        self.pilots.len()
+        self.policies.len()
     }
 
-    /// The seed of pilot 0 (pilot `i` has `seed + i`).
+    /// The seed of policy 0 (policy `i` has `seed + i`).
     #[getter]
     fn seed(&self) -> u64 {
         self.seed
