@@ -5,7 +5,8 @@
 Prints one line per case: the single env (`features`, and `rgb` 600 × 800) through `gymnasium.make` (with its
 wrappers) and through the environment's own `step`; the native vector env (`features`, `grayscale` 84 × 84) at
 N = 64 and 1024 with 1 and 2 threads, copy-free (`copy=False`) and with fresh arrays (`copy=True`, the default);
-SB3 `VecEnv`s (when stable-baselines3 is installed): the native adapter `chopperscape.integrations.sb3.ChopperScapeVecEnv`
+SB3 `VecEnv`s (when stable-baselines3 is installed): the native adapter
+`chopperscape.integrations.sb3.ChopperScapeVecEnv`
 against SB3's own `make_vec_env` (a `DummyVecEnv` of `Monitor`-wrapped envs), at N = 8 and 64; and Gymnasium's
 CartPole-v1 as a yardstick.
 """
@@ -15,9 +16,8 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import time
-
 import sys
+import time
 
 # This file sits beside the package's sources, which lack the compiled `_core`: import the installed package.
 sys.path = [p for p in sys.path if os.path.abspath(p or ".") != os.path.dirname(os.path.abspath(__file__))]
@@ -100,16 +100,28 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=1.0, help="measuring time per case (default 1.0)")
     args = parser.parse_args()
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print(f"# chopperscape {chopperscape.__version__}, Python {platform.python_version()}, "
-          f"{platform.machine()}, {cpus} CPUs, gymnasium {gym.__version__}")
+    print(
+        f"# chopperscape {chopperscape.__version__}, Python {platform.python_version()}, "
+        f"{platform.machine()}, {cpus} CPUs, gymnasium {gym.__version__}"
+    )
     cases = []
     for obs_type in ["features", "rgb"]:
-        cases.append((f"single {obs_type:<9} gymnasium.make", lambda o=obs_type: single(
-            gym.make("ChopperScape-v0", obs_type=o), own=False)))
-        cases.append((f"single {obs_type:<9} env.step", lambda o=obs_type: single(
-            gym.make("ChopperScape-v0", obs_type=o), own=True)))
-    for name, options in [("features", {"obs_type": "features"}),
-                          ("gray84x84", {"obs_type": "grayscale", "obs_size": (84, 84)})]:
+        cases.append(
+            (
+                f"single {obs_type:<9} gymnasium.make",
+                lambda o=obs_type: single(gym.make("ChopperScape-v0", obs_type=o), own=False),
+            )
+        )
+        cases.append(
+            (
+                f"single {obs_type:<9} env.step",
+                lambda o=obs_type: single(gym.make("ChopperScape-v0", obs_type=o), own=True),
+            )
+        )
+    for name, options in [
+        ("features", {"obs_type": "features"}),
+        ("gray84x84", {"obs_type": "grayscale", "obs_size": (84, 84)}),
+    ]:
         for n in [64, 1024]:
             for threads in [1, 2]:
                 for copy in [False, True]:

@@ -86,8 +86,10 @@ def main() -> None:
     p.add_argument("--device", default="cpu", help="cpu or cuda")
     a = p.parse_args()
     torch.set_num_threads(1)
-    print(f"# {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, device {a.device}, "
-          f"load average {os.getloadavg()[0]:.1f}")
+    print(
+        f"# {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, device {a.device}, "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
     print(f"{'case':<14} {'steps/s wall':>12} {'steps/s CPU':>12} {'env µs':>8} {'forward µs':>10} {'update µs':>10}")
     for case in a.case or list(CASES):
         recipe = recipe_for(case, a.steps, a.device)
@@ -98,8 +100,10 @@ def main() -> None:
             last = (Path(out) / "progress.csv").read_text().splitlines()[-1]
         steps = int(last.split(",")[0])
         split = parts(recipe)
-        print(f"{case:<14} {steps / wall:>12,.0f} {steps / cpu:>12,.0f} {split['env'] * 1e6:>8.1f} "
-              f"{split['forward'] * 1e6:>10.1f} {split['update'] * 1e6:>10.1f}")
+        print(
+            f"{case:<14} {steps / wall:>12,.0f} {steps / cpu:>12,.0f} {split['env'] * 1e6:>8.1f} "
+            f"{split['forward'] * 1e6:>10.1f} {split['update'] * 1e6:>10.1f}"
+        )
 
 
 if __name__ == "__main__":

@@ -63,6 +63,27 @@ run_pytest() {
     exit "$rc"
   fi
 }
+# The quality gate, as strict as fmt and clippy are for the Rust side: ruff's lint and format check over every
+# Python file of the repository (ruff.toml), mypy over the package (python/pyproject.toml), stubtest of the
+# compiled module against _core.pyi (python/stubtest-allowlist.txt says what it may report, and why), and the
+# docstring examples run as doctests. The tools are pinned: a release's new rules are adopted on purpose.
+GATE_SPEC="ruff==0.17.6 mypy==2.4.1"
+if [ "$(cat .venv/.chopperscape-gate 2>/dev/null)" != "$GATE_SPEC" ]; then
+  # shellcheck disable=SC2086
+  quiet "$PY" -m pip install --disable-pip-version-check -q $GATE_SPEC
+  echo "$GATE_SPEC" >.venv/.chopperscape-gate
+fi
+quiet .venv/bin/ruff check --no-cache .
+quiet .venv/bin/ruff format --check --no-cache .
+(cd python && quiet ../.venv/bin/mypy --no-incremental)
+(cd "$(mktemp -d)" && quiet "$ROOT/$PY" -m mypy.stubtest chopperscape._core --allowlist "$ROOT/python/stubtest-allowlist.txt")
+pkg=$("$PY" -c 'import chopperscape, os; print(os.path.dirname(os.path.abspath(chopperscape.__file__)))')
+# Doctests of the installed package; the 0.1 shims (they warn by design) and the RLlib module (run under
+# .venv-rllib below) are left out.
+shims=()
+for f in "$pkg"/*.py; do grep -q '^__chopperscape_shim__ = True' "$f" && shims+=("--ignore=$f"); done
+run_pytest "$PY" --doctest-modules "$pkg" "${shims[@]}" --ignore="$pkg/integrations/rllib.py"
+
 run_pytest "$PY" python/tests
 
 # Ray RLlib (python/tests/test_rllib.py, docs/rllib.md). Ray pins gymnasium==1.2.2, so RLlib gets its own
@@ -92,10 +113,9 @@ if ! "$RPY" -c 'import torch' >/dev/null 2>&1; then
   say "skipped: the RLlib tests (torch is not importable from .venv, which they share)"
   exit 0
 fi
-pkg=$("$PY" -c 'import chopperscape, os; print(os.path.dirname(os.path.abspath(chopperscape.__file__)))')
 if [ -e "$rsite/chopperscape" ] && [ ! -L "$rsite/chopperscape" ]; then  # a copy installed there by hand
   quiet "$RPY" -m pip uninstall --disable-pip-version-check -y -q chopperscape || true
   rm -rf "$rsite/chopperscape"
 fi
 ln -sfn "$pkg" "$rsite/chopperscape"
-run_pytest "$RPY" python/tests/test_rllib.py
+run_pytest "$RPY" python/tests/test_rllib.py --doctest-modules "$pkg/integrations/rllib.py"

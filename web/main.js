@@ -28,7 +28,7 @@ let game = null;
 let seed = 0n; // of the game on screen
 let over = false;
 let paused = false;
-let pilot = false;
+let heuristic = false;
 let agent = false; // the trained policy flies (its game was made with Game.with_policy)
 let agentBytes = null; // the policy file, fetched once
 let lastCause = null;
@@ -94,7 +94,7 @@ function newGame() {
 
 function action() {
   if (agent) return game.agent_action();
-  if (pilot) return game.heuristic_action();
+  if (heuristic) return game.heuristic_action();
   return held.length ? DIRECTIONS[held[held.length - 1]] : NOOP;
 }
 
@@ -122,10 +122,10 @@ function setPaused(on) {
   updateStatus();
 }
 
-function setPilot(on) {
+function setHeuristic(on) {
   if (on && agent) setAgentOff();
-  pilot = on;
-  $("pilot").setAttribute("aria-pressed", String(on));
+  heuristic = on;
+  $("heuristic").setAttribute("aria-pressed", String(on));
   if (on && over) newGame();
   updateStatus();
 }
@@ -162,7 +162,7 @@ async function setAgent(on) {
     showError(message);
     return message;
   }
-  if (pilot) setPilot(false);
+  if (heuristic) setHeuristic(false);
   agent = true;
   const error = newGame();
   if (error) {
@@ -177,7 +177,7 @@ async function setAgent(on) {
 }
 
 function updateStatus() {
-  const who = agent ? "The trained agent is flying" : pilot ? "The pilot is flying" : "You are flying";
+  const who = agent ? "The trained agent is flying" : heuristic ? "The heuristic is flying" : "You are flying";
   const state = over ? "episode over" : paused ? "paused" : `step ${game.steps()}`;
   $("status").textContent = `${who} · ${state}`;
 }
@@ -231,7 +231,7 @@ $("controls").addEventListener("submit", (event) => {
   if (newGame() === null) canvas.focus();
 });
 $("pause").addEventListener("click", () => setPaused(!paused));
-$("pilot").addEventListener("click", () => setPilot(!pilot));
+$("heuristic").addEventListener("click", () => setHeuristic(!heuristic));
 $("agent").addEventListener("click", () => setAgent(!agent));
 
 function base64(bytes) {
@@ -255,7 +255,7 @@ window.chopperscape = {
     over,
     cause: lastCause,
     paused,
-    pilot,
+    heuristic,
     agent,
   }),
   // Fills the form and starts a game; returns the error message, or null.
@@ -266,9 +266,9 @@ window.chopperscape = {
     return newGame();
   },
   setPaused,
-  setPilot,
+  setHeuristic,
   setAgent,
-  // The action the flyer on screen (the trained agent, the pilot, or no key: Do Nothing) picks now.
+  // The action the flyer on screen (the trained agent, the heuristic, or no key: Do Nothing) picks now.
   action: () => action(),
   // Steps these actions now (paused or not), stopping if the episode ends; then draws.
   stepN(actions) {

@@ -22,7 +22,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 sys.path.insert(0, str(HERE / "_ext"))
 
-import chopperscape  # the installed package: the API pages document what users get
+import chopperscape  # noqa: E402  (after the path above) the installed package: the API pages document what users get
 
 project = "ChopperScape"
 author = "The ChopperScape authors"

@@ -11,22 +11,21 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-from . import _core
+from . import _core, policies
 from .env import ChopperScapeEnv, clone_state, restore_state
 from .vector import VectorEnv
-from . import policies
 
 __all__ = [
+    "ACTION_MEANINGS",
+    "FEATURES_VERSION",
+    "OPTION_NAMES",
+    "PIXELS_VERSION",
     "ChopperScapeEnv",
     "VectorEnv",
-    "clone_state",
-    "restore_state",
-    "policies",
-    "ACTION_MEANINGS",
-    "OPTION_NAMES",
-    "FEATURES_VERSION",
-    "PIXELS_VERSION",
     "__version__",
+    "clone_state",
+    "policies",
+    "restore_state",
 ]
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)

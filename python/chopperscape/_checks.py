@@ -70,11 +70,6 @@ def policy_seed(seed: Any) -> int:
     return int(seed)
 
 
-# The old name, kept while `train.py` still imports it (issue 18 renamed "pilot" to "policy"); remove it once
-# nothing imports `pilot_seed`.
-pilot_seed = policy_seed
-
-
 def time_limit(value: Any) -> int | None:
     """`max_episode_steps`: `None` (never truncate) or an integer in `1..=4294967295`."""
     if value is None:

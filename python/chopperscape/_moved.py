@@ -47,13 +47,15 @@ def run(old: str, new: str) -> int:
 
 def _importer_level() -> int:
     """The `stacklevel` that points the warning at the code that imported the old path: the first frame that is
-    neither this module, a shim, nor the import system."""
+    neither this module, a shim, nor the import system. (`warnings.warn` itself skips the import system's frames
+    when it counts, so they are passed over here without being counted.)"""
     frame: FrameType | None = sys._getframe(1)
     level = 1
-    while frame is not None and (
-        frame.f_code.co_filename.startswith("<frozen importlib")
-        or frame.f_globals.get("__name__") == __name__
-        or frame.f_globals.get("__chopperscape_shim__", False)
-    ):
-        frame, level = frame.f_back, level + 1
+    while frame is not None:
+        internal = "importlib" in frame.f_code.co_filename and "_bootstrap" in frame.f_code.co_filename
+        if not internal:
+            if frame.f_globals.get("__name__") != __name__ and not frame.f_globals.get("__chopperscape_shim__"):
+                return level
+            level += 1
+        frame = frame.f_back
     return level

@@ -10,8 +10,15 @@ from gymnasium import spaces
 
 from ._checks import check_bool, check_reset_options, core_seed
 
-__all__ = ["BroadcastBox", "observation_box", "channel_axis", "batched_box", "check_bool", "check_reset_options",
-           "core_seed"]
+__all__ = [
+    "BroadcastBox",
+    "batched_box",
+    "channel_axis",
+    "check_bool",
+    "check_reset_options",
+    "core_seed",
+    "observation_box",
+]
 
 
 class BroadcastBox(spaces.Box):

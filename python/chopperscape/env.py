@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any, SupportsFloat
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-
 from gymnasium.wrappers import OrderEnforcing, TimeLimit
 
 if TYPE_CHECKING:
@@ -137,9 +136,12 @@ class ChopperScapeEnv(gym.Env):
 
     ## Version History
     - v0: the tutorial's game with its contradictions resolved as SPEC.md states.
-    """
+    """  # noqa: E501 - the Markdown tables above cannot wrap
 
-    metadata = {"render_modes": (["human"] if HUMAN_AVAILABLE else []) + ["rgb_array"], "render_fps": _core.RENDER_FPS}
+    metadata = {  # noqa: RUF012 - Gymnasium declares `metadata` a plain attribute
+        "render_modes": (["human"] if HUMAN_AVAILABLE else []) + ["rgb_array"],
+        "render_fps": _core.RENDER_FPS,
+    }
 
     def __init__(self, render_mode: str | None = None, keep_dim: bool = False, **options: Any):
         if render_mode == "human" and not HUMAN_AVAILABLE:

@@ -27,7 +27,8 @@ The heuristic plans for the options of the env it plays (`frame_skip`, `sticky_p
 
 from __future__ import annotations
 
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -41,11 +42,11 @@ __all__ = [
     "NAMES",
     "Policy",
     "VectorPolicy",
+    "episodes",
+    "fixed",
+    "heuristic",
     "make",
     "random",
-    "heuristic",
-    "fixed",
-    "episodes",
 ]
 
 #: Every built-in policy's name, as the command line's `--policy` takes it.

@@ -49,9 +49,9 @@ class VectorEnv(gym.vector.VectorEnv):
     `info["lives"]` (int64 arrays) with masks `info["_fuel"]`, `info["_lives"]` (one shared read-only
     all-true array), and `info["cause"]` (an object
     array of `"bird"`, `"fuel"` or `None`) with `info["_cause"]` when some episode terminated.
-    """
+    """  # noqa: E501 - the Markdown table above cannot wrap
 
-    metadata = {
+    metadata = {  # noqa: RUF012 - Gymnasium declares `metadata` a plain attribute
         "autoreset_mode": AutoresetMode.NEXT_STEP,
         "render_modes": ["rgb_array"],
         "render_fps": _core.RENDER_FPS,
@@ -192,9 +192,7 @@ class VectorEnv(gym.vector.VectorEnv):
         if not ended.any():
             return self._infos(fuel, lives)
         # The ended environments were reset in this step: their info is the reset info.
-        infos = self._infos(
-            np.where(ended, self._core.max_fuel, fuel), np.where(ended, self._core.lives, lives)
-        )
+        infos = self._infos(np.where(ended, self._core.max_fuel, fuel), np.where(ended, self._core.lives, lives))
         objs = np.full(self.num_envs, None, dtype=object)
         for i in np.flatnonzero(ended):
             objs[i] = self._shaped(final_obs[i].copy())
@@ -207,7 +205,9 @@ class VectorEnv(gym.vector.VectorEnv):
         if cause.any():
             final_info["cause"] = _CAUSES[cause]
             final_info["_cause"] = cause != 0
-        infos.update({"final_obs": objs, "_final_obs": ended.copy(), "final_info": final_info, "_final_info": ended.copy()})
+        infos.update(
+            {"final_obs": objs, "_final_obs": ended.copy(), "final_info": final_info, "_final_info": ended.copy()}
+        )
         return infos
 
     def __getstate__(self) -> dict[str, Any]:

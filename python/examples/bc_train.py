@@ -1,4 +1,4 @@
-"""Behaviour cloning baseline: a small MLP imitates the heuristic pilot from a Minari features dataset, then flies
+"""Behaviour cloning baseline: a small MLP imitates the heuristic policy from a Minari features dataset, then flies
 held-out seeds.
 
     python python/examples/bc_train.py          # 100 heuristic episodes, 30 epochs, 256 wide, 50 eval episodes
@@ -37,8 +37,9 @@ def train(x: np.ndarray, y: np.ndarray, epochs: int, seed: int, hidden: int = 25
     from torch import nn
 
     torch.manual_seed(seed)
-    model = nn.Sequential(nn.Linear(x.shape[1], hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU(),
-                          nn.Linear(hidden, 5))
+    model = nn.Sequential(
+        nn.Linear(x.shape[1], hidden), nn.ReLU(), nn.Linear(hidden, hidden), nn.ReLU(), nn.Linear(hidden, 5)
+    )
     opt = torch.optim.Adam(model.parameters(), lr=1e-3)
     xs, ys = torch.from_numpy(x), torch.from_numpy(y)
     g = torch.Generator().manual_seed(seed)
@@ -62,8 +63,9 @@ def evaluate(act, episodes: int, seed: int, max_episode_steps: int, options: dic
     """Returns of the first episode of each of `episodes` envs seeded `seed + i`; `act(envs, obs)` gives actions."""
     import chopperscape
 
-    envs = chopperscape.VectorEnv(episodes, obs_type="features", max_episode_steps=max_episode_steps, num_threads=1,
-                                  **options)
+    envs = chopperscape.VectorEnv(
+        episodes, obs_type="features", max_episode_steps=max_episode_steps, num_threads=1, **options
+    )
     obs, _ = envs.reset(seed=seed)
     returns, done = np.zeros(episodes), np.zeros(episodes, dtype=bool)
     while not done.all():
@@ -87,7 +89,7 @@ def main() -> None:
 
     import torch
 
-    from chopperscape import pilots
+    from chopperscape import policies
     from chopperscape.integrations import datasets
 
     torch.set_num_threads(1)
@@ -98,11 +100,14 @@ def main() -> None:
         tmp = tempfile.TemporaryDirectory(prefix="bc-minari-")
         os.environ["MINARI_DATASETS_PATH"] = tmp.name
         dataset_id = "chopperscape/heuristic-features-v0"
-        datasets.collect(dataset_id, "heuristic", args.episodes, 0, obs_type="features",
-                         max_episode_steps=args.max_episode_steps)
+        datasets.collect(
+            dataset_id, "heuristic", args.episodes, 0, obs_type="features", max_episode_steps=args.max_episode_steps
+        )
     ds, x, y = load(dataset_id)
-    print(f"dataset {dataset_id}: {ds.total_episodes} episodes, {len(x)} steps; actions "
-          f"{np.bincount(y, minlength=5).tolist()}")
+    print(
+        f"dataset {dataset_id}: {ds.total_episodes} episodes, {len(x)} steps; actions "
+        f"{np.bincount(y, minlength=5).tolist()}"
+    )
     model = train(x, y, args.epochs, args.seed, args.hidden)
 
     def bc(envs, obs):
@@ -112,15 +117,22 @@ def main() -> None:
     results = {}
     for name, act in [("bc", bc), ("heuristic", None), ("random", None)]:
         if act is None:
-            batch = pilots.VectorPilot(name, args.eval_episodes, seed=args.eval_seed)
+            batch = policies.VectorPolicy(name, args.eval_episodes, seed=args.eval_seed)
             act = lambda envs, obs, batch=batch: batch.act(envs)  # noqa: E731
         r = evaluate(act, args.eval_episodes, args.eval_seed, args.max_episode_steps, {})
         results[name] = {"mean": float(r.mean()), "std": float(r.std()), "episodes": len(r)}
-        print(f"{name:>9}: mean return {r.mean():.1f} ± {r.std():.1f} over {len(r)} held-out episodes "
-              f"(seeds {args.eval_seed}..{args.eval_seed + len(r) - 1})")
-    summary = {"dataset_steps": int(len(x)), "dataset_episodes": int(ds.total_episodes), "epochs": args.epochs,
-               "hidden": args.hidden,
-               "seconds": round(time.monotonic() - start, 1), **results}
+        print(
+            f"{name:>9}: mean return {r.mean():.1f} ± {r.std():.1f} over {len(r)} held-out episodes "
+            f"(seeds {args.eval_seed}..{args.eval_seed + len(r) - 1})"
+        )
+    summary = {
+        "dataset_steps": len(x),
+        "dataset_episodes": int(ds.total_episodes),
+        "epochs": args.epochs,
+        "hidden": args.hidden,
+        "seconds": round(time.monotonic() - start, 1),
+        **results,
+    }
     print(json.dumps(summary))
     if tmp is not None:
         tmp.cleanup()

@@ -28,13 +28,15 @@ for normalised in (False, True):
     policy_loss = -torch.min(adv * ratio, adv * ratio.clamp(0.8, 1.2)).mean()
     value_loss = model.vf_coef * torch.nn.functional.mse_loss(data.returns, values.flatten())
 
-    def grad_norm(loss: torch.Tensor) -> float:
+    def grad_norm(loss: torch.Tensor, policy: torch.nn.Module = policy) -> float:
         policy.zero_grad()
         loss.backward(retain_graph=True)
         return torch.sqrt(sum((p.grad**2).sum() for p in policy.parameters() if p.grad is not None)).item()
 
     g_policy, g_value, g_total = grad_norm(policy_loss), grad_norm(value_loss), grad_norm(policy_loss + value_loss)
     scale = min(1.0, model.max_grad_norm / g_total)
-    print(f"rewards {'normalised' if normalised else 'raw':>10}: mean return target {data.returns.mean():8.2f}, "
-          f"|grad policy| {g_policy:.3f}, |grad value| {g_value:9.3f}, clip factor {scale:.4f}, "
-          f"policy step {g_policy * scale:.4f}")
+    print(
+        f"rewards {'normalised' if normalised else 'raw':>10}: mean return target {data.returns.mean():8.2f}, "
+        f"|grad policy| {g_policy:.3f}, |grad value| {g_value:9.3f}, clip factor {scale:.4f}, "
+        f"policy step {g_policy * scale:.4f}"
+    )

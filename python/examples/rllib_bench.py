@@ -16,7 +16,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import rllib_ppo  # noqa: E402  (the same PPO config as the training example)
+import rllib_ppo
 
 
 def main() -> int:
@@ -34,20 +34,32 @@ def main() -> int:
     torch.set_num_threads(args.torch_threads)
 
     ray.init(logging_level="ERROR")
-    print(f"| runners | envs/runner | sub-envs | policy steps/s | random steps/s |  (CPUs: {os.cpu_count()}, "
-          f"load {os.getloadavg()[0]:.1f})")
+    print(
+        f"| runners | envs/runner | sub-envs | policy steps/s | random steps/s |  (CPUs: {os.cpu_count()}, "
+        f"load {os.getloadavg()[0]:.1f})"
+    )
     print("|---|---|---|---|---|")
     for runners in [int(r) for r in args.runners.split(",")]:
         for native in (True, False):
-            train_args = rllib_ppo.parse_args([
-                "--env-runners", str(runners), "--envs-per-runner", str(args.envs_per_runner),
-                "--obs-type", args.obs_type, "--native" if native else "--python-envs",
-            ])
+            train_args = rllib_ppo.parse_args(
+                [
+                    "--env-runners",
+                    str(runners),
+                    "--envs-per-runner",
+                    str(args.envs_per_runner),
+                    "--obs-type",
+                    args.obs_type,
+                    "--native" if native else "--python-envs",
+                ]
+            )
             algo = rllib_ppo.build_config(train_args).build_algo()
             rates = [measure(algo, runners, random, args) for random in (False, True)]
             algo.stop()
-            print(f"| {runners} | {args.envs_per_runner} | {'native batch' if native else 'Python (sync)'} | "
-                  f"{rates[0]:,.0f} | {rates[1]:,.0f} |", flush=True)
+            print(
+                f"| {runners} | {args.envs_per_runner} | {'native batch' if native else 'Python (sync)'} | "
+                f"{rates[0]:,.0f} | {rates[1]:,.0f} |",
+                flush=True,
+            )
     ray.shutdown()
     return 0
 

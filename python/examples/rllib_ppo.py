@@ -44,13 +44,18 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--address", default=None, help="Ray cluster to join ('auto', or host:port); default: a local Ray")
     p.add_argument("--minutes", type=float, default=30.0, help="training time (stops after the iteration past it)")
     p.add_argument("--iterations", type=int, default=None, help="stop after this many iterations (also)")
-    p.add_argument("--csv", default="runs/rllib-ppo/progress.csv",
-                   help="learning curve, one row per iteration (overwritten; default runs/rllib-ppo/progress.csv)")
+    p.add_argument(
+        "--csv",
+        default="runs/rllib-ppo/progress.csv",
+        help="learning curve, one row per iteration (overwritten; default runs/rllib-ppo/progress.csv)",
+    )
     mode = p.add_mutually_exclusive_group()
-    mode.add_argument("--native", dest="native", action="store_true", default=True,
-                      help="one native VectorEnv per runner (default)")
-    mode.add_argument("--python-envs", dest="native", action="store_false",
-                      help="Python sub-envs in RLlib's SyncVectorEnv instead")
+    mode.add_argument(
+        "--native", dest="native", action="store_true", default=True, help="one native VectorEnv per runner (default)"
+    )
+    mode.add_argument(
+        "--python-envs", dest="native", action="store_false", help="Python sub-envs in RLlib's SyncVectorEnv instead"
+    )
     p.add_argument("--obs-type", default="features", help="env option obs_type (default: features)")
     p.add_argument("--env-config", default="{}", help="more env options as JSON, e.g. '{\"alien_prob\": 0.1}'")
     p.add_argument("--seed", type=int, default=0, help="RLlib seed (runner w, env i get distinct game seeds)")
@@ -61,12 +66,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--gamma", type=float, default=0.995)
     p.add_argument("--lambda", dest="lambda_", type=float, default=0.95)
     p.add_argument("--entropy", type=float, default=0.01, help="entropy bonus coefficient")
-    p.add_argument("--no-norm-reward", dest="norm_reward", action="store_false",
-                   help="do not scale rewards by the running std of the discounted return")
+    p.add_argument(
+        "--no-norm-reward",
+        dest="norm_reward",
+        action="store_false",
+        help="do not scale rewards by the running std of the discounted return",
+    )
     p.add_argument("--hidden", default="128,128", help="hidden layer sizes of the policy and value networks")
-    p.add_argument("--torch-threads", type=int, default=1,
-                   help="torch threads of this process (the learner, and the sampler with 0 runners); runners get "
-                        "their CPUs' worth from Ray")
+    p.add_argument(
+        "--torch-threads",
+        type=int,
+        default=1,
+        help="torch threads of this process (the learner, and the sampler with 0 runners); runners get "
+        "their CPUs' worth from Ray",
+    )
     p.add_argument("--checkpoint", default=None, help="save the algorithm to this directory at the end")
     p.add_argument("--restore", default=None, help="start from a checkpoint saved by --checkpoint")
     p.add_argument("--summary", default=None, help="write a JSON summary to this file at the end")
@@ -125,8 +138,9 @@ def collect_episodes(env_runner: Any) -> list[tuple[int, float, int]]:
 
 def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
     """(runner index, env steps it sampled, game seeds of its sub-envs, process id, Ray node id) of a runner."""
-    import chopperscape.integrations.rllib
     import ray
+
+    import chopperscape.integrations.rllib
 
     return (
         int(env_runner.worker_index or 0),
@@ -138,10 +152,11 @@ def runner_report(env_runner: Any) -> tuple[int, int, list, int, str]:
 
 
 def build_config(args: argparse.Namespace):
-    import chopperscape.integrations.rllib  # registers "ChopperScape-v0" with RLlib
     from ray.rllib.algorithms.ppo import PPOConfig
     from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+
+    import chopperscape.integrations.rllib  # registers "ChopperScape-v0" with RLlib
 
     return (
         PPOConfig()
@@ -224,8 +239,11 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(f"error: {e}") from None
     connect(args)
     algo = build_config(args).build_algo()
-    summary: dict[str, Any] = {"native": args.native, "env_runners": args.env_runners,
-                               "envs_per_runner": args.envs_per_runner}
+    summary: dict[str, Any] = {
+        "native": args.native,
+        "env_runners": args.env_runners,
+        "envs_per_runner": args.envs_per_runner,
+    }
     if args.restore:
         algo.restore_from_path(os.path.abspath(args.restore))
         summary["restored_weights_sha256"] = weights_digest(algo)
@@ -255,12 +273,23 @@ def main(argv: list[str] | None = None) -> int:
                 mean = sum(returns) / len(returns)
                 std = math.sqrt(sum((r - mean) ** 2 for r in returns) / len(returns))
                 length = sum(n for _, n in window) / len(window)
-                out.row({"env_steps": env_steps, "wall_s": f"{wall:.2f}", "episodes": episodes,
-                         "mean_return": f"{mean:.3f}", "std_return": f"{std:.3f}", "mean_length": f"{length:.1f}"})
+                out.row(
+                    {
+                        "env_steps": env_steps,
+                        "wall_s": f"{wall:.2f}",
+                        "episodes": episodes,
+                        "mean_return": f"{mean:.3f}",
+                        "std_return": f"{std:.3f}",
+                        "mean_length": f"{length:.1f}",
+                    }
+                )
             else:
                 mean = std = length = math.nan
-            print(f"iter {iterations:4d}  steps {env_steps:9d}  episodes {episodes:6d}  "
-                  f"return {mean:9.1f} ± {std:7.1f}  length {length:8.1f}  {wall:7.1f}s", flush=True)
+            print(
+                f"iter {iterations:4d}  steps {env_steps:9d}  episodes {episodes:6d}  "
+                f"return {mean:9.1f} ± {std:7.1f}  length {length:8.1f}  {wall:7.1f}s",
+                flush=True,
+            )
             if wall >= args.minutes * 60 or (args.iterations is not None and iterations >= args.iterations):
                 break
     reports = [r for r in group.foreach_env_runner(runner_report, local_env_runner=True) if r[2]]

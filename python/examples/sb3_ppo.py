@@ -23,8 +23,8 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from chopperscape.learn import progress
 from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
+from chopperscape.learn import progress
 
 
 class ProgressCsv(BaseCallback):
@@ -48,9 +48,16 @@ class ProgressCsv(BaseCallback):
         if eps:
             r = np.array([e["r"] for e in eps])
             length = np.array([e["l"] for e in eps])
-            self.writer.row({"env_steps": self.num_timesteps, "wall_s": f"{time.monotonic() - self.start:.1f}",
-                             "episodes": self.episodes, "mean_return": f"{r.mean():.1f}",
-                             "std_return": f"{r.std():.1f}", "mean_length": f"{length.mean():.1f}"})
+            self.writer.row(
+                {
+                    "env_steps": self.num_timesteps,
+                    "wall_s": f"{time.monotonic() - self.start:.1f}",
+                    "episodes": self.episodes,
+                    "mean_return": f"{r.mean():.1f}",
+                    "std_return": f"{r.std():.1f}",
+                    "mean_length": f"{length.mean():.1f}",
+                }
+            )
 
     def _on_training_end(self) -> None:
         self.writer.close()
@@ -68,8 +75,18 @@ def main() -> None:
     a.out.mkdir(parents=True, exist_ok=True)
     if a.tuned:
         env = VecNormalize(ChopperScapeVecEnv(64, seed=a.seed, obs_type="features"), gamma=0.999)
-        model = PPO("MlpPolicy", env, n_steps=256, batch_size=2048, n_epochs=4, gamma=0.999, ent_coef=0.01,
-                    policy_kwargs={"net_arch": [128, 128]}, seed=a.seed, device="cpu")
+        model = PPO(
+            "MlpPolicy",
+            env,
+            n_steps=256,
+            batch_size=2048,
+            n_epochs=4,
+            gamma=0.999,
+            ent_coef=0.01,
+            policy_kwargs={"net_arch": [128, 128]},
+            seed=a.seed,
+            device="cpu",
+        )
     else:
         env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="features")
         model = PPO("MlpPolicy", env, seed=a.seed, device="cpu")

@@ -18,9 +18,21 @@ def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
     pytest.importorskip("torch", reason="torch is not installed: the behaviour-cloning smoke test is skipped")
     pytest.importorskip("minari", reason="minari is not installed: the behaviour-cloning smoke test is skipped")
     done = subprocess.run(
-        [sys.executable, str(ROOT / "python" / "examples" / "bc_train.py"), "--episodes", "2", "--epochs", "1",
-         "--eval-episodes", "3", "--max-episode-steps", "200"],
-        capture_output=True, text=True, timeout=600,
+        [
+            sys.executable,
+            str(ROOT / "python" / "examples" / "bc_train.py"),
+            "--episodes",
+            "2",
+            "--epochs",
+            "1",
+            "--eval-episodes",
+            "3",
+            "--max-episode-steps",
+            "200",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout.strip().splitlines()[-1])

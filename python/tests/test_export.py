@@ -1,5 +1,6 @@
 """Trained policies everywhere (issue 19): the ONNX export (`python -m chopperscape.learn.export`), the command line
-playing it (`chopperscape demo --policy MODEL.onnx`) the same episodes as `python -m chopperscape.learn.evaluate MODEL.pt`,
+playing it (`chopperscape demo --policy MODEL.onnx`) the same episodes as
+`python -m chopperscape.learn.evaluate MODEL.pt`,
 and videos from `evaluate --video`."""
 
 from __future__ import annotations
@@ -14,8 +15,7 @@ import subprocess
 
 import numpy as np
 import pytest
-
-from test_pilots import ROOT, cli
+from test_policies import ROOT, cli
 
 needs_torch = pytest.mark.skipif(
     importlib.util.find_spec("torch") is None or importlib.util.find_spec("onnx") is None,
@@ -130,7 +130,11 @@ def test_bad_models_and_outputs_are_one_line_errors(tmp_path, capsys):
 #: often as in training, so that every episode ends by a bird at a different step.
 CASES = [
     ([], ["max_episode_steps=400"], ["--max-episode-steps", "400"]),
-    (["bird_prob"], ["bird_prob=0.05", "max_episode_steps=2000"], ["--bird-prob", "0.05", "--max-episode-steps", "2000"]),
+    (
+        ["bird_prob"],
+        ["bird_prob=0.05", "max_episode_steps=2000"],
+        ["--bird-prob", "0.05", "--max-episode-steps", "2000"],
+    ),
 ]
 
 
@@ -144,7 +148,18 @@ def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(warned, options, 
     args = [MODEL, "--episodes", episodes, "--seed", seed, "--per-episode"]
     assert evaluate(*args, *[x for o in options for x in ("--option", o)]) == 0
     expected = json.loads(capsys.readouterr().out)["per_episode"]
-    cmd = [str(exe), "demo", "--policy", str(EXPORT), "--episodes", str(episodes), "--seed", str(seed), "--json", *flags]
+    cmd = [
+        str(exe),
+        "demo",
+        "--policy",
+        str(EXPORT),
+        "--episodes",
+        str(episodes),
+        "--seed",
+        str(seed),
+        "--json",
+        *flags,
+    ]
     run = subprocess.run(cmd, check=True, capture_output=True, text=True)
     got = [json.loads(line) for line in run.stdout.splitlines()]
     keys = ("seed", "return", "steps", "cause")
@@ -162,8 +177,11 @@ def test_cli_refuses_a_policy_file_it_cannot_run(tmp_path):
     bad = tmp_path / "bad.onnx"
     bad.write_bytes(EXPORT.read_bytes()[:500])
     for path, message in [(bad, "not a ChopperScape policy"), (tmp_path / "none.onnx", "cannot read")]:
-        run = subprocess.run([str(exe), "record", "--policy", str(path), "--out", str(tmp_path / "a.gif")],
-                             capture_output=True, text=True)
+        run = subprocess.run(
+            [str(exe), "record", "--policy", str(path), "--out", str(tmp_path / "a.gif")],
+            capture_output=True,
+            text=True,
+        )
         assert run.returncode == 2 and message in run.stderr and "panicked" not in run.stderr, run.stderr
         assert not (tmp_path / "a.gif").exists()
 
@@ -180,8 +198,23 @@ def test_evaluate_video_gif_shows_exactly_the_played_episodes(tmp_path, capsys):
     from chopperscape.env import ChopperScapeEnv
 
     out = tmp_path / "agent.gif"
-    assert evaluate(MODEL, "--episodes", 3, "--seed", 2, "--option", "bird_prob=0.2", "--per-episode",
-                    "--video", out, "--video-episodes", 2) == 0
+    assert (
+        evaluate(
+            MODEL,
+            "--episodes",
+            3,
+            "--seed",
+            2,
+            "--option",
+            "bird_prob=0.2",
+            "--per-episode",
+            "--video",
+            out,
+            "--video-episodes",
+            2,
+        )
+        == 0
+    )
     result = json.loads(capsys.readouterr().out)
     first_two = result["per_episode"][:2]
     assert "actions" not in first_two[0] and result["video"] == str(out)

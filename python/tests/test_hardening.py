@@ -16,11 +16,10 @@ import zlib
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import SHORT
 
 import chopperscape
 from chopperscape import ChopperScapeEnv, VectorEnv, _core
-
-from conftest import SHORT
 
 # Payload offsets of snapshot format version 2 (crates/core/src/snapshot.rs).
 OBS_TYPE, OBS_H, OBS_W, FRAME_STACK, RETURN, STEPS, HEADER = 0, 1, 5, 9, 109, 121, 10
@@ -37,8 +36,13 @@ def tamper(state: bytes, **fields: bytes) -> bytes:
 
 def huge_snapshot() -> bytes:
     small = ChopperScapeEnv(obs_type="features").clone_state()
-    return tamper(small, obs_type=b"\x01", obs_h=struct.pack("<I", 4096), obs_w=struct.pack("<I", 4096),
-                  frame_stack=struct.pack("<I", 64))
+    return tamper(
+        small,
+        obs_type=b"\x01",
+        obs_h=struct.pack("<I", 4096),
+        obs_w=struct.pack("<I", 4096),
+        frame_stack=struct.pack("<I", 64),
+    )
 
 
 def rss_mib() -> float:
@@ -50,8 +54,10 @@ def rss_mib() -> float:
 
 
 def test_observations_over_the_memory_budget_are_a_value_error_with_the_size():
-    for make in (lambda: ChopperScapeEnv(obs_size=(4096, 4096), frame_stack=64),
-                 lambda: VectorEnv(2, obs_size=(4096, 4096), frame_stack=64)):
+    for make in (
+        lambda: ChopperScapeEnv(obs_size=(4096, 4096), frame_stack=64),
+        lambda: VectorEnv(2, obs_size=(4096, 4096), frame_stack=64),
+    ):
         with pytest.raises(ValueError, match=r"frame_stack 64.*GiB.*budget of 4\.0 GiB"):
             make()
 
@@ -80,8 +86,11 @@ def test_spaces_without_per_element_bounds_are_plain_boxes_in_every_other_way():
     for obs_type in ["rgb", "rgb_float", "grayscale", "features"]:
         options = {"obs_type": obs_type, "obs_size": (16, 24), "frame_stack": 3}
         space = ChopperScapeEnv(**options).observation_space
-        expected_low, expected_high = (np.tile(_feature_bounds()[0], 3), np.tile(_feature_bounds()[1], 3)) \
-            if obs_type == "features" else (0, 1 if obs_type == "rgb_float" else 255)
+        expected_low, expected_high = (
+            (np.tile(_feature_bounds()[0], 3), np.tile(_feature_bounds()[1], 3))
+            if obs_type == "features"
+            else (0, 1 if obs_type == "rgb_float" else 255)
+        )
         plain = gym.spaces.Box(low=expected_low, high=expected_high, shape=space.shape, dtype=space.dtype)
         assert space == plain and plain == space
         assert space.contains(space.sample()) and space.is_bounded()
@@ -166,17 +175,20 @@ def test_set_state_refuses_states_the_batch_cannot_step_and_changes_nothing():
     options = {**SHORT, "bird_prob": 0.0}
     envs = VectorEnv(2, **options)
     envs.reset(seed=0)
-    started, slots = envs._core.state()
+    _started, slots = envs._core.state()
     before = [envs.env_state(i) for i in range(2)]
     ended, steps = ended_state(**options)
     never = ChopperScapeEnv(**options).clone_state()
-    for slot, message in [((ended, False, steps), "no reset is pending"), ((never, False, 0), "before any reset"),
-                          ((ended, True, steps + 1), f"elapsed steps {steps + 1}")]:
+    for slot, message in [
+        ((ended, False, steps), "no reset is pending"),
+        ((never, False, 0), "before any reset"),
+        ((ended, True, steps + 1), f"elapsed steps {steps + 1}"),
+    ]:
         with pytest.raises(ValueError, match=message):
             envs._core.set_state(True, [slot, slots[1]])
         assert [envs.env_state(i) for i in range(2)] == before
     # Every later step still works, and moves every environment.
-    obs, rewards, *_ = envs.step(np.array([4, 4]))
+    _obs, rewards, *_ = envs.step(np.array([4, 4]))
     assert list(rewards) == [1.0, 1.0]
     envs._core.set_state(True, [(ended, True, steps), slots[1]])
     _, rewards, *_ = envs.step(np.array([4, 4]))
@@ -229,11 +241,11 @@ def test_copy_false_arrays_are_read_only_and_copy_true_arrays_are_yours():
 
 @pytest.mark.parametrize("value", ["False", "True", 0, 1, None])
 def test_bool_options_take_bools_only(value):
-    with pytest.raises(ValueError, match="copy.*True or False"):
+    with pytest.raises(ValueError, match=r"copy.*True or False"):
         VectorEnv(2, copy=value, **SHORT)
-    with pytest.raises(ValueError, match="hud.*True or False"):
+    with pytest.raises(ValueError, match=r"hud.*True or False"):
         ChopperScapeEnv(hud=value)
-    with pytest.raises(ValueError, match="hud.*True or False"):
+    with pytest.raises(ValueError, match=r"hud.*True or False"):
         VectorEnv(2, hud=value)
 
 
@@ -301,8 +313,10 @@ def test_obs_size_refusals_name_the_option_and_the_form(size):
 
 
 def test_max_episode_steps_beyond_u32_names_the_allowed_range():
-    for make in (lambda: VectorEnv(2, max_episode_steps=2**32, **SHORT),
-                 lambda: _core.Env({"max_episode_steps": 2**32})):
+    for make in (
+        lambda: VectorEnv(2, max_episode_steps=2**32, **SHORT),
+        lambda: _core.Env({"max_episode_steps": 2**32}),
+    ):
         with pytest.raises(ValueError, match=r"max_episode_steps.*1\.\.=4294967295") as e:
             make()
         assert "integral type conversion" not in str(e.value)
@@ -405,8 +419,10 @@ def test_a_policy_on_an_env_another_thread_steps_gets_the_two_threads_message():
     core.reset(0)
     envs = VectorEnv(4, obs_size=(512, 512), frame_stack=2, bird_prob=0.0, max_fuel=1000000, max_episode_steps=None)
     envs.reset(seed=0)
-    for act, step in [(lambda: policies.Policy("heuristic").act(core), lambda: core.step(4)),
-                      (lambda: policies.VectorPolicy("heuristic", 4).act(envs), lambda: envs.step(np.full(4, 4)))]:
+    for act, step in [
+        (lambda: policies.Policy("heuristic").act(core), lambda: core.step(4)),
+        (lambda: policies.VectorPolicy("heuristic", 4).act(envs), lambda: envs.step(np.full(4, 4))),
+    ]:
         stop = threading.Event()
         worker = _busy(step, stop)
         worker.start()
@@ -427,8 +443,9 @@ def test_a_policy_on_an_env_another_thread_steps_gets_the_two_threads_message():
 
 def test_copy_false_arrays_cannot_be_made_writable_again():
     for autoreset in ["NextStep", "SameStep"]:
-        envs = VectorEnv(2, copy=False, autoreset_mode=autoreset, keep_dim=True, obs_type="grayscale",
-                         obs_size=(16, 16), max_fuel=5)
+        envs = VectorEnv(
+            2, copy=False, autoreset_mode=autoreset, keep_dim=True, obs_type="grayscale", obs_size=(16, 16), max_fuel=5
+        )
         obs, info = envs.reset(seed=0)
         before = obs.copy()
         outputs = [obs, *envs.step(np.array([0, 1]))[:4], info["fuel"], info["lives"], info["_fuel"], info["_lives"]]

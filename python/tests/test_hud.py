@@ -47,8 +47,9 @@ def test_the_layout_versions_are_exposed():
 
 @pytest.mark.parametrize("max_fuel", [1000, 237])
 def test_grayscale_frames_decode_to_info_fuel_at_every_level_and_to_info_lives(max_fuel):
-    env = ChopperScapeEnv(obs_type="grayscale", obs_size=(84, 84), bird_prob=0.0, fuel_prob=0.0, lives=3,
-                          max_fuel=max_fuel)
+    env = ChopperScapeEnv(
+        obs_type="grayscale", obs_size=(84, 84), bird_prob=0.0, fuel_prob=0.0, lives=3, max_fuel=max_fuel
+    )
     obs, info = env.reset(seed=0)
     levels = []
     while True:

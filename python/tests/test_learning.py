@@ -11,10 +11,9 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import SHORT
 
 from chopperscape import VectorEnv
-
-from conftest import SHORT
 
 needs_torch = pytest.mark.skipif(
     importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
@@ -49,7 +48,9 @@ def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
     # them again explicitly changes nothing.
     _, options = evaluate.load_recipe(path, False, 0, {})
     assert options["max_fuel"] == 200
-    assert evaluate.main([str(path), "--episodes", "3", "--seed", "77", "--per-episode", "--option", "max_fuel=200"]) == 0
+    assert (
+        evaluate.main([str(path), "--episodes", "3", "--seed", "77", "--per-episode", "--option", "max_fuel=200"]) == 0
+    )
     assert json.loads(capsys.readouterr().out) == second
 
 
@@ -66,8 +67,7 @@ def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_pat
     from chopperscape.learn.recipe import Recipe
 
     def run(name, **kw):
-        recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000,
-                              **kw)
+        recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000, **kw)
         train.train(recipe, tmp_path / name)
         return _progress(tmp_path / name / "progress.csv")
 
@@ -118,8 +118,27 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
 
     # The pixel preset at a smoke size: small frames, few envs; the same code path as the full recipe.
     out = tmp_path / "px"
-    assert train.main(["--preset", "pixels", "--steps", "1200", "--num-envs", "8", "--num-steps", "32", "--out", str(out),
-                "--option", "obs_size=42x42", "--option", "max_fuel=300"]) == 0
+    assert (
+        train.main(
+            [
+                "--preset",
+                "pixels",
+                "--steps",
+                "1200",
+                "--num-envs",
+                "8",
+                "--num-steps",
+                "32",
+                "--out",
+                str(out),
+                "--option",
+                "obs_size=42x42",
+                "--option",
+                "max_fuel=300",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     recipe = json.loads((out / "recipe.json").read_text())
     assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.996
@@ -131,7 +150,9 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     payload = torch.load(out / "model.pt", weights_only=True)
     assert payload["obs_shape"] == [42, 42, 4] and payload["pixels_version"] == chopperscape.PIXELS_VERSION
     # A model of another pixel layout is refused, naming both versions.
-    with pytest.raises(ValueError, match=f"pixel layout v1, and this chopperscape draws v{chopperscape.PIXELS_VERSION}"):
+    with pytest.raises(
+        ValueError, match=f"pixel layout v1, and this chopperscape draws v{chopperscape.PIXELS_VERSION}"
+    ):
         model.agent_from_checkpoint({**payload, "pixels_version": 1})
     agent = model.agent_from_checkpoint(payload)
     assert isinstance(agent, model.CnnAgent)
@@ -185,8 +206,26 @@ def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, ca
     from chopperscape.learn import train
 
     out = tmp_path / "bench"
-    args = ["--seeds", "0-1", "--steps", "2000", "--out", str(out), "--eval-episodes", "3", "--jobs", "2",
-            "--num-envs", "8", "--num-steps", "64", "--hidden", "16", "--option", "max_fuel=150"]
+    args = [
+        "--seeds",
+        "0-1",
+        "--steps",
+        "2000",
+        "--out",
+        str(out),
+        "--eval-episodes",
+        "3",
+        "--jobs",
+        "2",
+        "--num-envs",
+        "8",
+        "--num-steps",
+        "64",
+        "--hidden",
+        "16",
+        "--option",
+        "max_fuel=150",
+    ]
     assert train.main(args) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seeds"] == [0, 1] and set(summary["per_seed"]) == {"0", "1"}
@@ -195,7 +234,7 @@ def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, ca
     assert lo <= summary["iqm"] <= hi and min(means) <= lo and hi <= max(means)
     assert summary["eval"] == {"episodes": 3, "seed": 1_000_000}
     assert set(summary["baselines"]) == {"random", "heuristic"}
-    # The options reached training and every evaluation: max_fuel 150 bounds the pilots' episodes without tanks.
+    # The options reached training and every evaluation: max_fuel 150 bounds the policies' episodes without tanks.
     assert json.loads((out / "seed-1" / "recipe.json").read_text())["env_options"] == {"max_fuel": 150}
     assert "IQM" in (out / "summary.md").read_text() and "| 1 |" in (out / "summary.md").read_text()
     # Run again: every seed is already evaluated with these settings, so nothing is retrained.
@@ -204,16 +243,21 @@ def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, ca
     assert json.loads((out / "summary.json").read_text()) == summary
 
 
-def test_evaluate_plays_pilots_on_the_same_seeds_as_the_command_line(capsys):
-    from chopperscape import pilots
+def test_evaluate_plays_builtin_policies_on_the_same_seeds_as_the_command_line(capsys):
+    from chopperscape import policies
     from chopperscape.learn import evaluate
 
-    assert evaluate.main(["random", "--episodes", "3", "--seed", "4", "--per-episode",
-                          "--option", "max_fuel=300"]) == 0
+    assert evaluate.main(["random", "--episodes", "3", "--seed", "4", "--per-episode", "--option", "max_fuel=300"]) == 0
     out = json.loads(capsys.readouterr().out)
-    expected = [(e["seed"], e["return"], e["steps"]) for e in
-                ({"seed": 4 + i, "return": r, "steps": s} for i, (r, s) in
-                 enumerate((ep["return"], ep["steps"]) for ep in pilots.episodes("random", 3, 4, max_fuel=300)))]
+    expected = [
+        (e["seed"], e["return"], e["steps"])
+        for e in (
+            {"seed": 4 + i, "return": r, "steps": s}
+            for i, (r, s) in enumerate(
+                (ep["return"], ep["steps"]) for ep in policies.episodes("random", 3, 4, max_fuel=300)
+            )
+        )
+    ]
     assert [(e["seed"], e["return"], e["steps"]) for e in out["per_episode"]] == expected
 
 
@@ -238,11 +282,9 @@ def test_evaluation_episodes_replay_single_envs():
         env.reset(seed=r["seed"])
         total, steps, done = 0.0, 0, False
         while not done:
-            _, reward, term, trunc, info = env.step(4)
+            _, reward, term, trunc, _info = env.step(4)
             total, steps, done = total + reward, steps + 1, term or trunc
         assert (r["return"], r["steps"]) == (total, steps)
-
-
 
 
 @needs_sb3
@@ -345,7 +387,7 @@ def test_gymnasium_vector_wrappers_on_the_native_batch():
     finished = 0
     rng = np.random.default_rng(0)
     for _ in range(300):
-        obs, rew, term, trunc, info = wrapped.step(rng.integers(0, 5, 4))
+        obs, rew, _term, _trunc, info = wrapped.step(rng.integers(0, 5, 4))
         assert np.isfinite(obs).all() and np.isfinite(rew).all() and (np.abs(rew) <= 5).all()
         if "episode" in info:
             finished += int(info["_episode"].sum())
@@ -359,8 +401,9 @@ def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
 
     good = tmp_path / "run" / "progress.csv"
     good.parent.mkdir()
-    good.write_text("env_steps,wall_s,episodes,mean_return,std_return,mean_length\n1000,1.0,3,500,100,510\n"
-                    "2000,2.0,6,900,150,910\n")
+    good.write_text(
+        "env_steps,wall_s,episodes,mean_return,std_return,mean_length\n1000,1.0,3,500,100,510\n2000,2.0,6,900,150,910\n"
+    )
     out = tmp_path / "curve.png"
     assert plot.main([str(good), "--out", str(out), "--hline", "random=600"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -386,7 +429,7 @@ def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
     obs, _ = envs.reset(seed=2)
     assert obs.shape == (2, 84, 84, 1) and np.array_equal(obs[0, ..., 0], ref) and not obs.flags.writeable
     for _ in range(40):
-        obs, _, term, trunc, info = envs.step(np.array([4, 4]))
+        obs, _, _term, _trunc, info = envs.step(np.array([4, 4]))
         assert obs.shape == (2, 84, 84, 1)
         if "final_obs" in info:
             assert all(f.shape == (84, 84, 1) for f in info["final_obs"][info["_final_obs"]])
@@ -402,17 +445,22 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
     from chopperscape.learn import evaluate
-    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
-
-    from chopperscape.integrations.sb3 import save_normalization
 
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=64, n_epochs=1, device="cpu").learn(128)
     model.save(tmp_path / "model.zip")
     save_normalization(env, tmp_path / "vecnormalize.json")  # the statistics as data (a .pkl needs --trust-pickle)
-    args = [str(tmp_path / "model.zip"), "--episodes", "2", "--option", 'obs_type="features"', "--option",
-            "max_fuel=100"]
+    args = [
+        str(tmp_path / "model.zip"),
+        "--episodes",
+        "2",
+        "--option",
+        'obs_type="features"',
+        "--option",
+        "max_fuel=100",
+    ]
     assert evaluate.main(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["episodes"] == 2 and set(out["causes"]) <= {"bird", "fuel", "truncated"} and out["greedy"]

@@ -7,10 +7,9 @@ import tracemalloc
 
 import gymnasium as gym
 import numpy as np
+from conftest import SHORT
 
 from chopperscape import VectorEnv
-
-from conftest import SHORT
 
 
 def rss_kib() -> int:

@@ -12,7 +12,6 @@ import pickle
 import zipfile
 
 import pytest
-
 from conftest import SHORT
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -93,15 +92,28 @@ def test_a_model_whose_input_does_not_fit_the_options_is_a_clear_error(tmp_path,
     # A payload with the right format but damaged fields names the field.
     import torch
 
-    torch.save({"format": "chopperscape-ppo/1", "recipe": {"hidden": 8, "obs_type": "features", "env_options": {}},
-                "obs_dim": 46, "num_actions": 5, "actor": {"w": torch.zeros(2)}, "critic": {}}, tmp_path / "bad.pt")
+    torch.save(
+        {
+            "format": "chopperscape-ppo/1",
+            "recipe": {"hidden": 8, "obs_type": "features", "env_options": {}},
+            "obs_dim": 46,
+            "num_actions": 5,
+            "actor": {"w": torch.zeros(2)},
+            "critic": {},
+        },
+        tmp_path / "bad.pt",
+    )
     assert evaluate(tmp_path / "bad.pt", "--episodes", "1") == 2
     assert "`actor`" in capsys.readouterr().err
 
 
 def test_evaluate_options_that_collide_with_its_own_are_clear_errors(capsys):
-    for option, named in [("num_threads=2", "num_threads"), ("autoreset_mode=SameStep", "autoreset_mode"),
-                          ("copy=false", "copy"), ("no_such_option=1", "unknown option")]:
+    for option, named in [
+        ("num_threads=2", "num_threads"),
+        ("autoreset_mode=SameStep", "autoreset_mode"),
+        ("copy=false", "copy"),
+        ("no_such_option=1", "unknown option"),
+    ]:
         with pytest.raises(SystemExit) as e:
             evaluate("random", "--episodes", "1", "--option", option)
         assert e.value.code == 2
@@ -113,7 +125,7 @@ def test_evaluate_options_that_collide_with_its_own_are_clear_errors(capsys):
     assert out["mean_steps"] == 25 and out["causes"] == {"truncated": 1.0}
 
 
-def test_a_file_named_like_a_pilot_is_not_a_model_unless_given_as_a_path(tmp_path, monkeypatch, capsys):
+def test_a_file_named_like_a_builtin_policy_is_not_a_model_unless_given_as_a_path(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "random").write_bytes(b"whatever is here")
     assert evaluate("random", "--episodes", "2", "--seed", "4", "--option", f"max_fuel={SHORT['max_fuel']}") == 0
@@ -141,8 +153,9 @@ def sb3_model(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("sb3")
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
-    model = PPO("MlpPolicy", env, n_steps=32, batch_size=32, n_epochs=1, device="cpu",
-                policy_kwargs={"net_arch": [16]}).learn(64)
+    model = PPO(
+        "MlpPolicy", env, n_steps=32, batch_size=32, n_epochs=1, device="cpu", policy_kwargs={"net_arch": [16]}
+    ).learn(64)
     model.save(folder / "model.zip")
     env.save(str(folder / "vecnormalize.pkl"))
     save_normalization(env, folder / "vecnormalize.json")
@@ -201,8 +214,12 @@ def test_a_crafted_sb3_zip_or_vecnormalize_runs_no_code(sb3_model, tmp_path, cap
     policy = crafted("policy", lambda d: d.update(policy_class={":type:": "x", ":serialized:": evil}))
     assert evaluate(policy, *args) == 2
     assert "--trust-pickle" in capsys.readouterr().err
-    kwargs = crafted("kwargs", lambda d: d.update(
-        policy_kwargs={":type:": "<class 'dict'>", ":serialized:": evil, "activation_fn": "<class 'os.system'>"}))
+    kwargs = crafted(
+        "kwargs",
+        lambda d: d.update(
+            policy_kwargs={":type:": "<class 'dict'>", ":serialized:": evil, "activation_fn": "<class 'os.system'>"}
+        ),
+    )
     assert evaluate(kwargs, *args) == 2
     assert "policy_kwargs['activation_fn']" in capsys.readouterr().err
     # A crafted vecnormalize.pkl beside a good model.

@@ -1,8 +1,5 @@
 """The deprecated module `chopperscape.pilots` (renamed `chopperscape.policies`, issue 18): importing it warns,
 and its old names still work.
-
-It also re-exports `ROOT` and `cli` from `test_policies` for the test modules that still import them from here
-(`test_datasets.py`, `test_datasets_hostile.py`, `test_export.py`); import them from `test_policies` instead.
 """
 
 from __future__ import annotations
@@ -17,9 +14,10 @@ import pytest
 import chopperscape
 from chopperscape import policies
 
-from test_policies import ROOT, cli  # noqa: F401  (re-exported, see above)
-
-MESSAGE = "chopperscape.pilots is deprecated: use chopperscape.policies (Pilot -> Policy, VectorPilot -> VectorPolicy)"
+MESSAGE = (
+    "chopperscape.pilots is deprecated: use chopperscape.policies (Pilot -> Policy, VectorPilot -> VectorPolicy; "
+    "it goes away in 0.3.0)"
+)
 
 
 def _import_pilots():
@@ -30,9 +28,9 @@ def _import_pilots():
 
 
 def test_importing_the_old_module_warns_deprecation():
-    with pytest.warns(DeprecationWarning) as record:
+    with pytest.warns(FutureWarning) as record:
         _import_pilots()
-    messages = [str(w.message) for w in record if issubclass(w.category, DeprecationWarning)]
+    messages = [str(w.message) for w in record if issubclass(w.category, FutureWarning)]
     assert messages == [MESSAGE]
 
 
@@ -47,11 +45,11 @@ def test_the_warning_points_at_the_importer():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split() == ["1", "DeprecationWarning", "<string>", "4"], out.stdout
+    assert out.stdout.split() == ["1", "FutureWarning", "<string>", "4"], out.stdout
 
 
 def test_the_old_names_still_work():
-    with pytest.warns(DeprecationWarning, match="chopperscape.pilots is deprecated"):
+    with pytest.warns(FutureWarning, match="chopperscape.pilots is deprecated"):
         pilots = _import_pilots()
     assert pilots.Pilot is policies.Policy and pilots.VectorPilot is policies.VectorPolicy
     assert pilots.Policy is policies.Policy and pilots.VectorPolicy is policies.VectorPolicy

@@ -66,7 +66,9 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("policy,options", CASES, ids=[f"{p}-{'-'.join(map(str, o.values())) or 'v0'}" for p, o in CASES])
+@pytest.mark.parametrize(
+    "policy,options", CASES, ids=[f"{p}-{'-'.join(map(str, o.values())) or 'v0'}" for p, o in CASES]
+)
 def test_single_env_policy_plays_the_cli_demo_episodes(policy, options):
     expected = demo(policy, 3, 11, options)
     got = list(policies.episodes(policy, 3, 11, max_episode_steps=STEPS, **options))
@@ -161,7 +163,7 @@ def test_heuristic_plans_for_the_frame_skip_of_the_env_it_flies():
 
 
 def test_bad_input_is_refused_clearly():
-    with pytest.raises(ValueError, match="unknown policy 'genius'.*heuristic"):
+    with pytest.raises(ValueError, match=r"unknown policy 'genius'.*heuristic"):
         policies.make("genius")
     with pytest.raises(ValueError, match="invalid seed -1"):
         policies.random(-1)

@@ -24,18 +24,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("ray", reason="Ray is not installed: pip install 'ray[rllib]' torch (scripts/test-python.sh "
-                    "does, into .venv-rllib)")
+pytest.importorskip(
+    "ray", reason="Ray is not installed: pip install 'ray[rllib]' torch (scripts/test-python.sh does, into .venv-rllib)"
+)
 pytest.importorskip("ray.rllib", reason="RLlib is not installed: pip install 'ray[rllib]' torch")
 pytest.importorskip("torch", reason="torch is not installed (RLlib's PPO needs it): pip install torch")
 
-import chopperscape  # noqa: E402
-import chopperscape.integrations.rllib as crl  # noqa: E402
-from chopperscape.learn import progress  # noqa: E402
-import gymnasium as gym  # noqa: E402
-from ray.rllib.algorithms.ppo import PPOConfig  # noqa: E402
-from ray.rllib.env.env_context import EnvContext  # noqa: E402
-from ray.rllib.env.single_agent_env_runner import SingleAgentEnvRunner  # noqa: E402
+import gymnasium as gym
+from ray.rllib.algorithms.ppo import PPOConfig
+from ray.rllib.env.env_context import EnvContext
+from ray.rllib.env.single_agent_env_runner import SingleAgentEnvRunner
+
+import chopperscape
+import chopperscape.integrations.rllib as crl
+from chopperscape.learn import progress
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "python" / "examples" / "rllib_ppo.py"
@@ -77,7 +79,11 @@ def test_creator_takes_lists_from_json_configs_as_tuples():
 def test_example_rejects_a_bad_env_config_before_starting_ray():
     run = subprocess.run(
         [sys.executable, str(EXAMPLE), "--env-config", '{"obs_type": "nope"}', "--iterations", "1"],
-        check=False, capture_output=True, text=True, timeout=120, env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
     )
     assert run.returncode != 0
     assert run.stderr.strip().splitlines()[-1].startswith("error: invalid value nope for option `obs_type`")
@@ -145,8 +151,12 @@ def test_float_pixels_feed_rllibs_default_cnn_with_grayscale_frames():
     config = (
         PPOConfig()
         .environment(crl.ENV_NAME, env_config={"obs_type": "grayscale", "obs_size": [84, 84]})
-        .env_runners(num_env_runners=0, num_envs_per_env_runner=2, gym_env_vectorize_mode="vector_entry_point",
-                     env_to_module_connector=lambda env, spaces, device: crl.FloatPixels())
+        .env_runners(
+            num_env_runners=0,
+            num_envs_per_env_runner=2,
+            gym_env_vectorize_mode="vector_entry_point",
+            env_to_module_connector=lambda env, spaces, device: crl.FloatPixels(),
+        )
     )
     runner = SingleAgentEnvRunner(config=config, worker_index=0, num_workers=0)
     episodes = runner.sample(num_timesteps=4)
@@ -203,12 +213,24 @@ def ray_cluster():
     }
     port = _free_port()
     args = [
-        str(ray_cli), "start", "--head", "--block", "--node-ip-address=127.0.0.1", f"--port={port}",
-        f"--temp-dir={temp}", "--include-dashboard=false", f"--dashboard-port={_free_port()}", "--num-cpus=2",
-        f"--object-store-memory={256 * 2**20}", "--disable-usage-stats",
-        f"--node-manager-port={_free_port()}", f"--object-manager-port={_free_port()}",
-        f"--dashboard-agent-listen-port={_free_port()}", f"--dashboard-agent-grpc-port={_free_port()}",
-        f"--runtime-env-agent-port={_free_port()}", f"--metrics-export-port={_free_port()}",
+        str(ray_cli),
+        "start",
+        "--head",
+        "--block",
+        "--node-ip-address=127.0.0.1",
+        f"--port={port}",
+        f"--temp-dir={temp}",
+        "--include-dashboard=false",
+        f"--dashboard-port={_free_port()}",
+        "--num-cpus=2",
+        f"--object-store-memory={256 * 2**20}",
+        "--disable-usage-stats",
+        f"--node-manager-port={_free_port()}",
+        f"--object-manager-port={_free_port()}",
+        f"--dashboard-agent-listen-port={_free_port()}",
+        f"--dashboard-agent-grpc-port={_free_port()}",
+        f"--runtime-env-agent-port={_free_port()}",
+        f"--metrics-export-port={_free_port()}",
     ]
     log_path = Path(temp) / "ray-start.log"
     with open(log_path, "w") as log:
@@ -250,10 +272,33 @@ def _stop_cluster(head: subprocess.Popen, temp: str) -> None:
 def _train(cluster, out: Path, name: str, *extra: str) -> tuple[dict, list[dict]]:
     csv_path, summary_path = out / f"{name}.csv", out / f"{name}.json"
     cmd = [
-        sys.executable, str(EXAMPLE), "--address", cluster["address"], "--env-runners", "2",
-        "--envs-per-runner", "4", "--train-batch-size", "400", "--minibatch-size", "100", "--epochs", "1",
-        "--hidden", "16", "--seed", "3", "--env-config", '{"max_fuel": 40}', "--minutes", "5",
-        "--csv", str(csv_path), "--summary", str(summary_path), *extra,
+        sys.executable,
+        str(EXAMPLE),
+        "--address",
+        cluster["address"],
+        "--env-runners",
+        "2",
+        "--envs-per-runner",
+        "4",
+        "--train-batch-size",
+        "400",
+        "--minibatch-size",
+        "100",
+        "--epochs",
+        "1",
+        "--hidden",
+        "16",
+        "--seed",
+        "3",
+        "--env-config",
+        '{"max_fuel": 40}',
+        "--minutes",
+        "5",
+        "--csv",
+        str(csv_path),
+        "--summary",
+        str(summary_path),
+        *extra,
     ]
     run = subprocess.run(cmd, check=False, env=cluster["env"], capture_output=True, text=True, timeout=420)
     assert run.returncode == 0, f"{' '.join(cmd)} failed:\n{run.stdout[-3000:]}\n{run.stderr[-6000:]}"
@@ -280,8 +325,9 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     # Native batches, seeded (3 + w) * K + i: eight distinct games.
     assert summary["seeds_per_runner"] == {str(w): [(3 + w) * K + i for i in range(4)] for w in (1, 2)}
 
-    restored, rows2 = _train(ray_cluster, tmp_path, "second", "--iterations", "1", "--python-envs",
-                             "--restore", str(tmp_path / "ck"))
+    restored, rows2 = _train(
+        ray_cluster, tmp_path, "second", "--iterations", "1", "--python-envs", "--restore", str(tmp_path / "ck")
+    )
     assert restored["restored_weights_sha256"] == summary["weights_sha256"]
     assert restored["restored_env_steps"] == summary["env_steps"]
     assert int(rows2[0]["env_steps"]) >= summary["env_steps"] + 400  # the counters continue

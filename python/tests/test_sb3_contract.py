@@ -6,14 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import SHORT
 
 pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not installed")
-from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
-from stable_baselines3.common.monitor import Monitor  # noqa: E402
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.monitor import Monitor
 
-from chopperscape.integrations.sb3 import ChopperScapeVecEnv  # noqa: E402
+from chopperscape.integrations.sb3 import ChopperScapeVecEnv
 
 N = 4
 
@@ -46,14 +45,22 @@ def test_the_same_calls_give_the_same_results_as_dummy_vec_env():
     for indices in (None, 1, [0, 3], [-1], [np.int64(2)]):
         assert ref.get_attr("render_mode", indices) == ours.get_attr("render_mode", indices)
         assert ref.env_method("get_action_meanings", indices=indices) == ours.env_method(
-            "get_action_meanings", indices=indices)
+            "get_action_meanings", indices=indices
+        )
         assert ref.env_is_wrapped(Monitor, indices) == ours.env_is_wrapped(Monitor, indices)
     # Out of range: IndexError from both, for every indexed call; not indices: TypeError from both.
-    for indices, error in (([N], IndexError), ([-N - 1], IndexError), (N + 5, IndexError), (np.int64(2), TypeError),
-                           ([1.0], TypeError)):
-        for call in (lambda e: e.get_attr("render_mode", indices),
-                     lambda e: e.env_method("get_action_meanings", indices=indices),
-                     lambda e: e.env_is_wrapped(Monitor, indices)):
+    for indices, error in (
+        ([N], IndexError),
+        ([-N - 1], IndexError),
+        (N + 5, IndexError),
+        (np.int64(2), TypeError),
+        ([1.0], TypeError),
+    ):
+        for call in (
+            lambda e, indices=indices: e.get_attr("render_mode", indices),
+            lambda e, indices=indices: e.env_method("get_action_meanings", indices=indices),
+            lambda e, indices=indices: e.env_is_wrapped(Monitor, indices),
+        ):
             for env in (ref, ours):
                 with pytest.raises(error):
                     call(env)
@@ -66,8 +73,11 @@ def test_the_same_calls_give_the_same_results_as_dummy_vec_env():
 
 
 # (A value out of range is refused by both too, but DummyVecEnv steps the envs before it first.)
-@pytest.mark.parametrize("bad", [np.zeros((2, 2), np.int64), np.zeros((N, 1), np.int64), np.zeros(N, np.float32)],
-                         ids=["2x2", "Nx1", "float"])
+@pytest.mark.parametrize(
+    "bad",
+    [np.zeros((2, 2), np.int64), np.zeros((N, 1), np.int64), np.zeros(N, np.float32)],
+    ids=["2x2", "Nx1", "float"],
+)
 def test_bad_actions_are_refused_as_dummy_vec_env_refuses_them_and_never_reused(bad):
     ref, ours = pair()
     ref.seed(1)

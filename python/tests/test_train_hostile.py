@@ -29,15 +29,29 @@ def no_training(monkeypatch):
     return calls
 
 
-@pytest.mark.parametrize("args,named", [
-    (["--minutes", "nan"], "minutes"), (["--minutes", "-1"], "minutes"), (["--minutes", "inf"], "minutes"),
-    (["--steps", "0"], "steps"), (["--num-envs", "0"], "num_envs"), (["--seed", "-1"], "seed"),
-    (["--num-minibatches", "0"], "num_minibatches"), (["--num-minibatches", "100000"], "num_minibatches"),
-    (["--torch-threads", "0"], "torch_threads"), (["--env-threads", "0"], "env_threads"), (["--gamma", "1.5"], "gamma"),
-    (["--learning-rate", "nan"], "learning_rate"), (["--option", "obs_type=rgb"], "--obs-type"),
-    (["--option", "num_threads=2"], "--env-threads"), (["--option", "lives=0"], "lives"),
-    (["--device", "banana"], "device"), (["--device", "tpu"], "device"), (["--device", "cuda:99"], "cuda:99"),
-])
+@pytest.mark.parametrize(
+    "args,named",
+    [
+        (["--minutes", "nan"], "minutes"),
+        (["--minutes", "-1"], "minutes"),
+        (["--minutes", "inf"], "minutes"),
+        (["--steps", "0"], "steps"),
+        (["--num-envs", "0"], "num_envs"),
+        (["--seed", "-1"], "seed"),
+        (["--num-minibatches", "0"], "num_minibatches"),
+        (["--num-minibatches", "100000"], "num_minibatches"),
+        (["--torch-threads", "0"], "torch_threads"),
+        (["--env-threads", "0"], "env_threads"),
+        (["--gamma", "1.5"], "gamma"),
+        (["--learning-rate", "nan"], "learning_rate"),
+        (["--option", "obs_type=rgb"], "--obs-type"),
+        (["--option", "num_threads=2"], "--env-threads"),
+        (["--option", "lives=0"], "lives"),
+        (["--device", "banana"], "device"),
+        (["--device", "tpu"], "device"),
+        (["--device", "cuda:99"], "cuda:99"),
+    ],
+)
 def test_bad_settings_are_refused_before_anything_is_written(args, named, tmp_path, no_training, capsys):
     out = tmp_path / "run"
     with pytest.raises(SystemExit) as e:
@@ -90,8 +104,12 @@ def test_force_starts_the_run_over(tmp_path):
 
 def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_path):
     run = tmp_path / "run"
-    proc = subprocess.Popen([sys.executable, "-m", "chopperscape.learn.train", "--out", str(run), "--minutes", "5", *SMALL],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "chopperscape.learn.train", "--out", str(run), "--minutes", "5", *SMALL],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         csv = run / "progress.csv"
@@ -100,7 +118,7 @@ def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_
         assert proc.poll() is None, proc.stderr.read()
         time.sleep(0.1)
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
+    _out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "is saved in" in err, err
     model = torch.load(run / "model.pt", weights_only=True)

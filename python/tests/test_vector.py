@@ -9,12 +9,11 @@ import pickle
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import SHORT
 from gymnasium.vector import AutoresetMode, SyncVectorEnv
 
 import chopperscape
 from chopperscape import VectorEnv
-
-from conftest import SHORT
 
 LIMIT = 30  # max_episode_steps of the short episodes: truncations happen too
 
@@ -72,8 +71,14 @@ def test_same_step_batch_equals_sync_vector_env_of_single_envs(threads):
 
 
 def test_pixel_batches_equal_sync_vector_env_too():
-    run_against_sync(3, 2, 5, AutoresetMode.NEXT_STEP, steps=80, **{**SHORT, "obs_type": "grayscale",
-                                                                    "obs_size": (24, 32), "frame_stack": 2})
+    run_against_sync(
+        3,
+        2,
+        5,
+        AutoresetMode.NEXT_STEP,
+        steps=80,
+        **{**SHORT, "obs_type": "grayscale", "obs_size": (24, 32), "frame_stack": 2},
+    )
 
 
 def test_env_i_follows_the_single_env_seeded_s_plus_i():
@@ -85,8 +90,9 @@ def test_env_i_follows_the_single_env_seeded_s_plus_i():
 
 
 def test_make_vec_builds_the_native_env_with_the_registered_time_limit():
-    envs = gym.make_vec("ChopperScape-v0", num_envs=4, vectorization_mode="vector_entry_point",
-                        obs_type="features", num_threads=2)
+    envs = gym.make_vec(
+        "ChopperScape-v0", num_envs=4, vectorization_mode="vector_entry_point", obs_type="features", num_threads=2
+    )
     assert isinstance(envs.unwrapped, VectorEnv)
     assert envs.unwrapped.max_episode_steps == 10_000 and envs.unwrapped.num_threads == 2
     assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
@@ -94,9 +100,9 @@ def test_make_vec_builds_the_native_env_with_the_registered_time_limit():
     assert envs.observation_space.shape == (4, 46)
     assert envs.single_action_space == gym.spaces.Discrete(5)
     assert envs.action_space == gym.spaces.MultiDiscrete([5] * 4)
-    obs, info = envs.reset(seed=0)
+    obs, _info = envs.reset(seed=0)
     assert envs.observation_space.contains(obs)
-    obs, rewards, terminated, truncated, info = envs.step(envs.action_space.sample())
+    obs, rewards, _terminated, _truncated, _info = envs.step(envs.action_space.sample())
     assert rewards.dtype == np.float64 or rewards.dtype == np.float32
     assert envs.observation_space.contains(obs)
     envs.close()

@@ -62,8 +62,15 @@ def test_the_latest_release_in_the_changelog_is_this_version():
 def test_no_placeholder_address_is_shipped():
     # The project has no public home yet: no metadata, README or changelog may point at a made-up one (add the real
     # addresses, and the changelog's compare links, when there is one).
-    for name in ("Cargo.toml", "CHANGELOG.md", "python/pyproject.toml", "python/cli/pyproject.toml",
-                 "python/cli/README.md", "python/README.md", "README.md"):
+    for name in (
+        "Cargo.toml",
+        "CHANGELOG.md",
+        "python/pyproject.toml",
+        "python/cli/pyproject.toml",
+        "python/cli/README.md",
+        "python/README.md",
+        "README.md",
+    ):
         text = (ROOT / name).read_text(encoding="utf-8")
         assert "example.invalid" not in text and "example.com" not in text, f"{name} has a placeholder address"
 

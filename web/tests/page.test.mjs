@@ -77,17 +77,17 @@ test("the score grows while the game runs", async () => {
   });
 });
 
-test("watch the pilot flies on its own", async () => {
+test("watch the heuristic flies on its own", async () => {
   await withPage(async (page, errors) => {
     await page.evaluate(() => window.chopperscape.newGame(4));
     const start = await state(page);
-    await page.click("#pilot");
-    assert.equal(await page.getAttribute("#pilot", "aria-pressed"), "true");
-    // The heuristic pilot heads home to x ≈ 150 from the spawn at x < 80, with no key pressed.
+    await page.click("#heuristic");
+    assert.equal(await page.getAttribute("#heuristic", "aria-pressed"), "true");
+    // The heuristic heads home to x ≈ 150 from the spawn at x < 80, with no key pressed.
     await page.waitForFunction((x0) => window.chopperscape.state().x >= x0 + 30, start.x);
     const s = await state(page);
-    assert.ok(s.pilot && s.steps > 6, JSON.stringify(s));
-    assert.match(await page.textContent("#status"), /pilot is flying/);
+    assert.ok(s.heuristic && s.steps > 6, JSON.stringify(s));
+    assert.match(await page.textContent("#status"), /heuristic is flying/);
     assert.deepEqual(errors, []);
   });
 });

@@ -1,5 +1,5 @@
 //! The action log: one played episode as a JSON document that `chopperscape replay` re-runs, and that
-//! `chopperscape.datasets.from_action_logs` (Python) replays into a dataset. This crate is the one reader of
+//! `chopperscape.integrations.datasets.from_action_logs` (Python) replays into a dataset. This crate is the one reader of
 //! it, shared by the command line and the Python binding, so both accept and refuse exactly the same files.
 //!
 //! ```json

@@ -4,7 +4,7 @@
 //! Whatever writes a temporary file, folder or child process registers it here for as long as it exists
 //! ([`register`]); a handler thread started by [`install`] cleans up what is registered when a signal
 //! comes. A swap that must not be cut in half holds the registry ([`hold`]) so the handler waits for it.
-//! A child that cleans up after itself (`python -m chopperscape.datasets`) is [`Cleanup::Stop`]ped: it gets
+//! A child that cleans up after itself (`python -m chopperscape.integrations.datasets`) is [`Cleanup::Stop`]ped: it gets
 //! the same signal and is waited for, so that it removes its own unfinished files before this process exits.
 
 use std::path::PathBuf;
@@ -135,7 +135,7 @@ fn stop(pid: u32, signal: i32) {
 fn stop(_pid: u32, _signal: i32) {}
 
 /// Makes a child process get SIGTERM when this process dies, however it dies (SIGKILL included), so that a
-/// child such as `python -m chopperscape.datasets` never goes on writing alone. Linux only; elsewhere nothing.
+/// child such as `python -m chopperscape.integrations.datasets` never goes on writing alone. Linux only; elsewhere nothing.
 pub fn die_with_parent(cmd: &mut std::process::Command) {
     #[cfg(target_os = "linux")]
     {

@@ -1,5 +1,5 @@
-//! `--policy FILE.onnx`: a trained policy (from `python -m chopperscape.export`) in `demo` and `record`.
-//! (`python/tests/test_export.py` checks its episodes against `python -m chopperscape.evaluate` on the `.pt`.)
+//! `--policy FILE.onnx`: a trained policy (from `python -m chopperscape.learn.export`) in `demo` and `record`.
+//! (`python/tests/test_export.py` checks its episodes against `python -m chopperscape.learn.evaluate` on the `.pt`.)
 
 use std::path::Path;
 

@@ -21,10 +21,10 @@ pub enum PolicyError {
         max: u64,
     },
     /// The bytes are not an ONNX model, or one this crate does not run (a graph it does not accept).
-    #[error("not a ChopperScape policy (export one with `python -m chopperscape.export`): {0}")]
+    #[error("not a ChopperScape policy (export one with `python -m chopperscape.learn.export`): {0}")]
     NotPolicy(String),
     /// A metadata entry is missing or malformed.
-    #[error("the policy's metadata `{key}` {problem} (export it again with `python -m chopperscape.export`)")]
+    #[error("the policy's metadata `{key}` {problem} (export it again with `python -m chopperscape.learn.export`)")]
     Metadata {
         /// The `metadata_props` key.
         key: &'static str,

@@ -1,4 +1,4 @@
-//! Trained ChopperScape policies in pure Rust: an ONNX file from `python -m chopperscape.export`, run by
+//! Trained ChopperScape policies in pure Rust: an ONNX file from `python -m chopperscape.learn.export`, run by
 //! [tract](https://github.com/sonos/tract), acting greedily from the env's own observation.
 //!
 //! # How the types relate

@@ -1,4 +1,4 @@
-//! What an exported policy says about itself: the ONNX `metadata_props` that `python -m chopperscape.export`
+//! What an exported policy says about itself: the ONNX `metadata_props` that `python -m chopperscape.learn.export`
 //! writes, one key each (the names below are the file format; `python/chopperscape/export.py` writes the same).
 
 use chopperscape::{Config, ObsType};

@@ -1,7 +1,7 @@
 //! What a policy graph may hold, checked on the decoded protobuf before tract builds anything from it.
 //!
 //! tract runs any ONNX graph; a policy file may come from anyone. So before tract sees it, the graph must be
-//! what `python -m chopperscape.export` writes: operators from a short list (none that sizes its output from a
+//! what `python -m chopperscape.learn.export` writes: operators from a short list (none that sizes its output from a
 //! value in the file, as `Expand`, `Tile`, `ConstantOfShape`, `Range` or `Resize` do, and none with a subgraph),
 //! no external data (which tract would read from beside the file), no sparse tensors, and no tensor holding
 //! more elements than the file has bytes. Every allocation tract then makes is bounded by the file's size and

@@ -1,5 +1,5 @@
 //! `chopperscape._core.read_action_log`: the command line's own action-log reader (`chopperscape-actionlog`),
-//! so that `chopperscape.datasets.from_action_logs` accepts and refuses exactly the logs `replay` does, with
+//! so that `chopperscape.integrations.datasets.from_action_logs` accepts and refuses exactly the logs `replay` does, with
 //! the same 64 MiB cap.
 
 use std::path::PathBuf;

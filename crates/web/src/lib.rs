@@ -58,7 +58,7 @@ impl Game {
     }
 
     /// A game flown by a trained policy: `policy` holds the bytes of an exported `.onnx` (from
-    /// `python -m chopperscape.export`), played under the options it was trained with, then `names[i] = values[i]`.
+    /// `python -m chopperscape.learn.export`), played under the options it was trained with, then `names[i] = values[i]`.
     /// Throws an `Error` saying what is wrong with the file or an option.
     pub fn with_policy(policy: &[u8], names: Vec<String>, values: Vec<String>) -> Result<Game, JsError> {
         if names.len() != values.len() {

@@ -126,7 +126,9 @@ def _own_members(cls, names: list[str] | None):
 
 class AutodocMd(SphinxDirective):
     required_arguments = 1
-    option_spec: ClassVar[dict] = {"members": lambda arg: [] if arg is None else [a.strip() for a in arg.split(",") if a.strip()]}
+    option_spec: ClassVar[dict] = {
+        "members": lambda arg: [] if arg is None else [a.strip() for a in arg.split(",") if a.strip()]
+    }
 
     def run(self):
         module, obj = _import(self.arguments[0])

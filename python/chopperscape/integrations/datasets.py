@@ -1,21 +1,27 @@
-"""Datasets in Farama's Minari format: episodes of a built-in pilot, or human play replayed from action logs.
+"""Datasets in Farama's Minari format: episodes of a built-in policy, or human play replayed from action logs.
 
->>> from chopperscape import datasets
->>> ds = datasets.collect("chopperscape/heuristic-features-v0", pilot="heuristic", episodes=100,
-...                       obs_type="features")
->>> import minari; minari.load_dataset("chopperscape/heuristic-features-v0")  # the same dataset
+>>> import os, tempfile
+>>> os.environ["MINARI_DATASETS_PATH"] = tempfile.mkdtemp()  # where datasets go (default ~/.minari/datasets)
+>>> from chopperscape.integrations import datasets
+>>> ds = datasets.collect("chopperscape/heuristic-features-v0", policy="heuristic", episodes=3, obs_type="features")
+>>> ds.total_episodes, ds.storage.metadata["seeds"]
+(3, [0, 1, 2])
+>>> import minari
+>>> minari.load_dataset("chopperscape/heuristic-features-v0").total_steps == ds.total_steps  # the same dataset
+True
 
 Datasets are written under `MINARI_DATASETS_PATH` (default `~/.minari/datasets`), where `minari.load_dataset`
 finds them, in Minari's HDF5 layout through Minari's own storage classes, with images stored raw (lossless,
 `jpeg_encoding=False`), so a dataset equals a replay of its seeds exactly. Needs `pip install "minari[hdf5]"`.
 
-- Episode `i` of `collect(..., seed=S)` is played from `reset(seed=S + i)` with the pilot restarted with that seed:
+- Episode `i` of `collect(..., seed=S)` is played from `reset(seed=S + i)` with the policy restarted with that seed:
   exactly the episodes of `chopperscape demo --policy P --episodes N --seed S`.
 - Each episode's seed is stored (Minari's episode metadata `seed`); the dataset metadata holds the env spec (with
   every option), `chopperscape_version`, the observation layouts' versions (`features_version`, `pixels_version`:
-  what the stored observations show), `pilot`, `seeds`, `env_options` and `max_episode_steps`.
+  what the stored observations show), `policy`, `seeds`, `env_options` and `max_episode_steps`.
 - Observations are `features` unless `obs_type` says otherwise (the one default of this module, of
-  `python -m chopperscape.integrations.datasets` and of `chopperscape dataset`). `max_episode_steps=None` means no time limit
+  `python -m chopperscape.integrations.datasets` and of `chopperscape dataset`). `max_episode_steps=None` means no
+  time limit
   (the dataset's env spec then has none either).
 - Steps stream to disk every `chunk_steps` steps, so memory stays bounded however long the collection; the
   dataset is written in a temporary folder next to its place, `.NAME.PID.XXXXXXXX.part`, and moved there at the
@@ -41,7 +47,9 @@ import shutil
 import sys
 import tempfile
 import time
-from typing import Any, Callable, Iterable, Iterator
+import warnings
+from collections.abc import Iterable, Iterator
+from typing import Any, Callable
 
 try:
     import resource
@@ -51,11 +59,11 @@ except ImportError:  # pragma: no cover - not on Windows
 import gymnasium as gym
 import numpy as np
 
-from .. import _cli, _core, _signals, pilots
+from .. import _cli, _core, _signals, policies
 from .._checks import positive_int, time_limit
 from ..env import make_env
 
-__all__ = ["collect", "from_action_logs", "read_action_log", "DEFAULT_OBS_TYPE"]
+__all__ = ["DEFAULT_OBS_TYPE", "collect", "from_action_logs", "read_action_log"]
 
 ENV_ID = "ChopperScape-v0"
 #: The observation of a dataset unless `obs_type` says otherwise (600 × 800 rgb would be 1.4 MB a step).
@@ -69,13 +77,14 @@ _TEMP_RE = re.compile(r"\.(?P<name>.+)\.(?P<pid>[0-9]+)\.[a-z0-9_]{8}\.part")
 def _minari():
     try:
         import h5py  # noqa: F401
-        import PIL  # noqa: F401  (Minari's HDF5 storage imports it)
         import minari
+        import PIL  # noqa: F401  (Minari's HDF5 storage imports it)
         from minari.data_collector import EpisodeBuffer
         from minari.dataset.minari_storage import MinariStorage
     except ImportError as e:
         raise ImportError(
-            f'chopperscape.integrations.datasets needs Minari with HDF5 support: pip install "minari[hdf5]" pillow ({e})'
+            "chopperscape.integrations.datasets needs Minari with HDF5 support: "
+            f'pip install "minari[hdf5]" pillow ({e})'
         ) from None
     return minari, EpisodeBuffer, MinariStorage
 
@@ -216,13 +225,18 @@ def _check_room(file: pathlib.Path, nbytes: int) -> None:
     size = file.stat().st_size if file.exists() else 0
     limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0] if resource is not None else -1
     if limit != getattr(resource, "RLIM_INFINITY", -1) and limit >= 0 and size + need > limit:
-        raise OSError(errno.EFBIG, f"the file-size limit (ulimit -f) of {_mib(limit)} leaves no room for the next "
-                                   f"{_mib(need)} (the file has {_mib(size)})", str(file))
+        raise OSError(
+            errno.EFBIG,
+            f"the file-size limit (ulimit -f) of {_mib(limit)} leaves no room for the next "
+            f"{_mib(need)} (the file has {_mib(size)})",
+            str(file),
+        )
     st = os.statvfs(file.parent if file.parent.exists() else file.parent.parent)
     free = (st.f_bfree if os.geteuid() == 0 else st.f_bavail) * st.f_frsize
     if need > free:
-        raise OSError(errno.ENOSPC, f"the disk is full: {_mib(free)} free, the next write needs about {_mib(need)}",
-                      str(file))
+        raise OSError(
+            errno.ENOSPC, f"the disk is full: {_mib(free)} free, the next write needs about {_mib(need)}", str(file)
+        )
 
 
 def _mib(n: int) -> str:
@@ -270,7 +284,7 @@ def _write(
             tr: list[bool] = []
             first, steps, ret = True, 0, 0.0
 
-            def flush() -> None:
+            def flush(ep: int = ep, seed: int = seed) -> None:  # bound now: called within this episode only
                 nonlocal first, o, a, r, te, tr
                 if not a:
                     return
@@ -283,8 +297,13 @@ def _write(
                     terminations=np.asarray(te, dtype=np.bool_),
                     truncations=np.asarray(tr, dtype=np.bool_),
                 )
-                _check_room(data_file, sum(getattr(buffer, k).nbytes for k in (
-                    "observations", "actions", "rewards", "terminations", "truncations")))
+                _check_room(
+                    data_file,
+                    sum(
+                        getattr(buffer, k).nbytes
+                        for k in ("observations", "actions", "rewards", "terminations", "truncations")
+                    ),
+                )
                 storage.update_episodes([buffer])
                 first, o, a, r, te, tr = False, [], [], [], [], []
 
@@ -325,8 +344,10 @@ def _write(
     except OSError as e:
         # A failed write (disk full, a file-size limit): one line naming the file; the partial dataset goes.
         where = e.filename or (tmp / "data" / "main_data.hdf5" if tmp is not None else final)
-        raise OSError(e.errno, f"cannot write the dataset {dataset_id!r} ({where}): {e.strerror or e}; "
-                               "the unfinished dataset was removed") from None
+        raise OSError(
+            e.errno,
+            f"cannot write the dataset {dataset_id!r} ({where}): {e.strerror or e}; the unfinished dataset was removed",
+        ) from None
     finally:
         if tmp is not None and tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
@@ -339,14 +360,18 @@ def _write(
 def _move_into_place(tmp: pathlib.Path, final: pathlib.Path, dataset_id: str) -> None:
     """Renames the finished folder to the dataset's place, never over anything that appeared there meanwhile."""
     if os.path.lexists(final):
-        raise ValueError(f"a dataset {dataset_id!r} appeared at {final} while this one was written: nothing was "
-                         "replaced; choose another name or version")
+        raise ValueError(
+            f"a dataset {dataset_id!r} appeared at {final} while this one was written: nothing was "
+            "replaced; choose another name or version"
+        )
     try:
         os.rename(tmp, final)
     except OSError as e:
         if e.errno in (errno.EEXIST, errno.ENOTEMPTY, errno.ENOTDIR, errno.EISDIR):
-            raise ValueError(f"a dataset {dataset_id!r} appeared at {final} while this one was written: nothing "
-                             "was replaced; choose another name or version") from None
+            raise ValueError(
+                f"a dataset {dataset_id!r} appeared at {final} while this one was written: nothing "
+                "was replaced; choose another name or version"
+            ) from None
         raise
 
 
@@ -369,10 +394,11 @@ def _metadata(dataset_id: str, algorithm: str, options: dict, max_episode_steps:
 
 def collect(
     dataset_id: str,
-    pilot: str = "heuristic",
+    policy: str = "heuristic",
     episodes: int = 1,
     seed: int = 0,
     *,
+    pilot: str | None = None,
     max_episode_steps: int | None = 10_000,
     chunk_steps: int = 1000,
     progress: bool | None = None,
@@ -380,18 +406,24 @@ def collect(
     description: str | None = None,
     **options: Any,
 ):
-    """Plays `episodes` episodes of the built-in `pilot` (see `chopperscape.pilots.NAMES`) into a new Minari
+    """Plays `episodes` episodes of the built-in `policy` (see `chopperscape.policies.NAMES`) into a new Minari
     dataset `dataset_id` (`"namespace/name-vN"`) and returns it (`minari.MinariDataset`). `options` are the env's
     keyword options (`obs_type="grayscale"`, `obs_size=(84, 84)`, `frame_skip=4`, ...; `obs_type` defaults to
-    `"features"`). Episode `i` starts from `reset(seed=seed + i)` with the pilot restarted with that seed, as
-    `chopperscape demo` plays them. `max_episode_steps=None`: no time limit."""
-    pilots._check_name(pilot)
-    seed = pilots._check_seed(seed)
+    `"features"`). Episode `i` starts from `reset(seed=seed + i)` with the policy restarted with that seed, as
+    `chopperscape demo` plays them. `max_episode_steps=None`: no time limit. (`pilot=`, 0.1's name of `policy`,
+    still works and warns; it goes away in 0.3.0.)"""
+    if pilot is not None:
+        warnings.warn(
+            "collect(pilot=...) is now collect(policy=...) (pilot= goes away in 0.3.0)", FutureWarning, stacklevel=2
+        )
+        policy = pilot
+    policies._check_name(policy)
+    seed = policies._check_seed(seed)
     episodes = positive_int("episodes", episodes)
     max_episode_steps = time_limit(max_episode_steps)
     options = {"obs_type": DEFAULT_OBS_TYPE, **options}
     env = make_env(max_episode_steps, **options)
-    player = pilots.Pilot(pilot, seed)
+    player = policies.Policy(policy, seed)
 
     def plays() -> Iterator[tuple[int, Callable[[], int]]]:
         for i in range(episodes):
@@ -401,13 +433,13 @@ def collect(
 
     meta = _metadata(
         dataset_id,
-        f"chopperscape.pilots:{pilot}",
+        f"chopperscape.policies:{policy}",
         options,
         max_episode_steps,
-        pilot=pilot,
+        policy=policy,
         author={author} if author else None,
         description=description
-        or f"{episodes} episodes of the {pilot} pilot on {ENV_ID} (seeds {seed}..{seed + episodes - 1})",
+        or f"{episodes} episodes of the {policy} policy on {ENV_ID} (seeds {seed}..{seed + episodes - 1})",
     )
     try:
         return _write(dataset_id, env, plays(), episodes, meta, chunk_steps, progress)
@@ -437,7 +469,8 @@ def from_action_logs(
 ):
     """Replays action logs (`chopperscape play --save-actions FILE`) into a new Minari dataset: one episode per
     log, from the log's seed with its rules options. `obs_options` choose the observation (`obs_type` (default
-    `"features"`), `obs_size`, `frame_stack`, `hud`, `hud_style`); every log must have the same rules options. A log that
+    `"features"`), `obs_size`, `frame_stack`, `hud`, `hud_style`); every log must have the same rules options. A log
+    that
     stopped before its episode ended gives an episode whose last step is truncated. `ValueError` when a replay
     does not reach the steps or return its log recorded (a log from other rules)."""
     if isinstance(logs, (str, os.PathLike)):
@@ -447,8 +480,10 @@ def from_action_logs(
         raise ValueError("no action logs given: from_action_logs needs at least one")
     bad = sorted(set(obs_options) - {"obs_type", "obs_size", "frame_stack", "hud", "hud_style"})
     if bad:
-        raise ValueError(f"options {bad} change the rules, which come from the logs: allowed obs_type, obs_size, "
-                         "frame_stack, hud, hud_style")
+        raise ValueError(
+            f"options {bad} change the rules, which come from the logs: allowed obs_type, obs_size, "
+            "frame_stack, hud, hud_style"
+        )
     read = [read_action_log(p) for p in paths]
     rules, limit = read[0]["options"], read[0]["max_episode_steps"]
     for p, log in zip(paths, read):
@@ -471,7 +506,7 @@ def from_action_logs(
         "human" if all(log["policy"] in (None, "human") for log in read) else "action-logs",
         options,
         limit,
-        pilot="action logs",
+        policy="action logs",
         action_logs=[p.name for p in paths],
         author={author} if author else None,
         description=description or f"{len(paths)} episodes replayed from chopperscape action logs",
@@ -500,16 +535,20 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m chopperscape.integrations.datasets",
         description="Write a Minari dataset of ChopperScape-v0 episodes (under MINARI_DATASETS_PATH). "
-                    f"Observations are {DEFAULT_OBS_TYPE} unless --option obs_type=... says otherwise.",
+        f"Observations are {DEFAULT_OBS_TYPE} unless --option obs_type=... says otherwise.",
     )
     parser.add_argument("--out", required=True, help='the dataset id, e.g. "chopperscape/heuristic-v0"')
-    parser.add_argument("--policy", choices=pilots.NAMES, help="the pilot (default heuristic)")
+    parser.add_argument("--policy", choices=policies.NAMES, help="the built-in policy (default heuristic)")
     parser.add_argument("--episodes", type=int, help="episodes to play (default 1)")
     parser.add_argument("--seed", type=int, help="seed of the first episode (default 0)")
-    parser.add_argument("--from-logs", nargs="+", metavar="LOG", help="replay these action logs instead of a pilot")
-    parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
-                        help="an env option, as the command line's flags take it (obs_size=84x84, hud=false, "
-                             "max_episode_steps=none)")
+    parser.add_argument("--from-logs", nargs="+", metavar="LOG", help="replay these action logs instead of a policy")
+    parser.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="an env option, as the command line's flags take it (obs_size=84x84, hud=false, max_episode_steps=none)",
+    )
     parser.add_argument("--chunk-steps", type=int, default=1000)
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
@@ -517,20 +556,29 @@ def main(argv: list[str] | None = None) -> int:
     if args.from_logs:
         given = [f"--{n}" for n in ("policy", "episodes", "seed") if getattr(args, n) is not None]
         if given:
-            parser.error(f"{', '.join(given)} cannot be given with --from-logs: the logs hold their own seeds and "
-                         "actions")
+            parser.error(
+                f"{', '.join(given)} cannot be given with --from-logs: the logs hold their own seeds and actions"
+            )
     limit = options.pop("max_episode_steps", 10_000)
     progress = False if args.no_progress else None
     try:
         if args.from_logs:
             if "max_episode_steps" in [o.partition("=")[0].strip() for o in args.option]:
-                raise ValueError("--option max_episode_steps cannot be given with --from-logs: the logs hold their "
-                                 "own rules")
+                raise ValueError(
+                    "--option max_episode_steps cannot be given with --from-logs: the logs hold their own rules"
+                )
             ds = from_action_logs(args.out, args.from_logs, chunk_steps=args.chunk_steps, progress=progress, **options)
         else:
-            ds = collect(args.out, args.policy or "heuristic", 1 if args.episodes is None else args.episodes,
-                         0 if args.seed is None else args.seed, max_episode_steps=limit, chunk_steps=args.chunk_steps,
-                         progress=progress, **options)
+            ds = collect(
+                args.out,
+                args.policy or "heuristic",
+                1 if args.episodes is None else args.episodes,
+                0 if args.seed is None else args.seed,
+                max_episode_steps=limit,
+                chunk_steps=args.chunk_steps,
+                progress=progress,
+                **options,
+            )
     except (ValueError, ImportError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

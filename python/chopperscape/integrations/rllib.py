@@ -201,8 +201,9 @@ class ReturnScaling(ConnectorV2):
 
     A batch whose rows are not one per episode step (padded for a recurrent module) is left as it is."""
 
-    def __init__(self, input_observation_space: Any = None, input_action_space: Any = None, *, gamma: float = 0.99,
-                 **kwargs: Any) -> None:
+    def __init__(
+        self, input_observation_space: Any = None, input_action_space: Any = None, *, gamma: float = 0.99, **kwargs: Any
+    ) -> None:
         super().__init__(input_observation_space, input_action_space, **kwargs)
         self.gamma = float(gamma)
         self.rms = RunningMeanStd(shape=())
@@ -223,7 +224,9 @@ class ReturnScaling(ConnectorV2):
         return {"mean": float(self.rms.mean), "var": float(self.rms.var), "count": float(self.rms.count)}
 
     def set_state(self, state: dict[str, float]) -> None:
-        self.rms.mean, self.rms.var, self.rms.count = state["mean"], state["var"], state["count"]
+        self.rms.mean = np.asarray(state["mean"], np.float64)
+        self.rms.var = np.asarray(state["var"], np.float64)
+        self.rms.count = float(state["count"])
 
 
 def discounted_returns(rewards: np.ndarray, lengths: list[int], gamma: float) -> np.ndarray:

@@ -40,8 +40,9 @@ import pickle
 import re
 import time
 import zipfile
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable
 
 import gymnasium as gym
 import numpy as np
@@ -74,7 +75,11 @@ class ChopperScapeVecEnv(VecEnv):
         **options: Any,
     ):
         self.venv = VectorEnv(
-            num_envs, autoreset_mode=AutoresetMode.SAME_STEP, copy=True, render_mode=render_mode, keep_dim=keep_dim,
+            num_envs,
+            autoreset_mode=AutoresetMode.SAME_STEP,
+            copy=True,
+            render_mode=render_mode,
+            keep_dim=keep_dim,
             **options,
         )
         self.render_mode = render_mode
@@ -115,7 +120,9 @@ class ChopperScapeVecEnv(VecEnv):
         self._reset_options()
         self._ep_return[:] = 0
         self._ep_len[:] = 0
-        self.reset_infos = [{"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i])} for i in range(self.num_envs)]
+        self.reset_infos = [
+            {"fuel": int(info["fuel"][i]), "lives": int(info["lives"][i])} for i in range(self.num_envs)
+        ]
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:
@@ -348,7 +355,7 @@ def load_normalization(
                 f"chopperscape.integrations.sb3.save_normalization(vec_normalize, {str(data)!r})"
             )
         with open(pkl, "rb") as f:
-            norm = pickle.load(f)  # noqa: S301 - the user said they trust this file
+            norm = pickle.load(f)
         norm.training = False
         return norm.normalize_obs
     return None

@@ -4,9 +4,10 @@
 
 `MODEL` is a file written by ``python -m chopperscape.learn.train`` (``model.pt``), a Stable-Baselines3 ``.zip`` (then
 give the env options it was trained with: ``--option obs_type=features``; a ``vecnormalize.json`` beside it, from
-``chopperscape.integrations.sb3.save_normalization``, normalises the observations as in training), or the name of a built-in
-pilot (``random``, ``heuristic``, ``noop``…, see ``chopperscape.pilots``), so that baselines come from the same
-seeds; a file named like a pilot is given as ``./NAME``.
+``chopperscape.integrations.sb3.save_normalization``, normalises the observations as in training), or the name of a
+built-in
+built-in policy (``random``, ``heuristic``, ``noop``…, see ``chopperscape.policies``), so that baselines come from
+the same seeds; a file named like a built-in policy is given as ``./NAME``.
 
 Loading a model never runs code from it: a recipe model is read with ``torch.load(weights_only=True)`` (tensors
 and plain data), and the pickled parts of an SB3 ``.zip`` are replaced by what the env gives. Pickles (SB3's
@@ -42,6 +43,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .._cli import env_options, print_line
+from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
 
 #: Most environments stepped together while evaluating (bounded memory, whatever `--episodes`).
@@ -49,11 +51,15 @@ CHUNK = 128
 
 
 def play_episodes(
-    act: Callable[[np.ndarray, VectorEnv], np.ndarray], episodes: int, seed: int, env_options: dict[str, Any],
-    max_episode_steps: int | None = 10_000, keep_actions: int = 0,
+    act: Callable[[np.ndarray, VectorEnv], np.ndarray],
+    episodes: int,
+    seed: int,
+    env_options: dict[str, Any],
+    max_episode_steps: int | None = 10_000,
+    keep_actions: int = 0,
 ) -> list[dict[str, Any]]:
     """Plays `episodes` episodes on seeds `seed, seed + 1, …` with `act(obs_batch, envs) -> actions` (`envs`, the
-    `VectorEnv` being played, is for pilots that read the game); one dict each (`seed`, `return`, `steps`,
+    `VectorEnv` being played, is for built-in policies that read the game); one dict each (`seed`, `return`, `steps`,
     `cause`, and for the first `keep_actions` episodes `actions`, the list of actions taken)."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"invalid value {episodes!r} for `episodes`: allowed an integer >= 1")
@@ -78,8 +84,8 @@ def play_episodes(
                 ret += np.where(live, reward, 0).astype(np.int64)
                 steps += live
                 ended = live & (term | trunc)
-                for i in np.flatnonzero(ended):
-                    causes[i] = str(info["cause"][i]) if term[i] else "truncated"
+                for j in np.flatnonzero(ended).tolist():
+                    causes[j] = str(info["cause"][j]) if term[j] else "truncated"
                 live &= ~ended
         finally:
             envs.close()
@@ -109,20 +115,20 @@ def summary(results: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-class _PilotPlayer:
-    """A built-in pilot over each chunk of environments: pilot `i` seeded as environment `i` (`S + i`)."""
+class _BuiltinPlayer:
+    """A built-in policy over each chunk of environments: policy `i` seeded as environment `i` (`S + i`)."""
 
     def __init__(self, name: str):
         self.name = name
-        self.pilot = None
+        self.policy: VectorPolicy | None = None
 
     def start_chunk(self, n: int, seed: int) -> None:
-        from ..pilots import VectorPilot
 
-        self.pilot = VectorPilot(self.name, n, seed=seed)
+        self.policy = VectorPolicy(self.name, n, seed=seed)
 
     def __call__(self, obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
-        return self.pilot.act(envs)
+        assert self.policy is not None
+        return self.policy.act(envs)
 
 
 #: `--option` names evaluation does not take, and why.
@@ -138,32 +144,34 @@ def observation_shape(options: dict[str, Any]) -> tuple[int, ...]:
     """The observation shape of one env with `options` (a `ValueError` naming a bad option)."""
     envs = VectorEnv(1, num_threads=1, max_episode_steps=None, **options)
     try:
-        return tuple(envs.single_observation_space.shape)
+        return tuple(envs.single_observation_space.shape or ())
     finally:
         envs.close()
 
 
-def load_policy(model: str | Path, stochastic: bool, seed: int, env_options: dict[str, Any],
-                trust_pickle: bool = False):
-    """`(act, env_options)` for a model file (a recipe `model.pt`, a Stable-Baselines3 `.zip`) or a pilot name.
+def load_policy(
+    model: str | Path, stochastic: bool, seed: int, env_options: dict[str, Any], trust_pickle: bool = False
+):
+    """`(act, env_options)` for a model file (a recipe `model.pt`, a Stable-Baselines3 `.zip`) or a built-in
+    policy's name.
 
-    A bare pilot name (`"random"`, a `str`) is always the pilot; a file of that name is read as `./random` (or a
+    A bare built-in name (`"random"`, a `str`) is always that policy; a file of that name is read as `./random` (or a
     `Path`). Loading never runs code from the file (see `load_recipe`, `load_sb3`) unless `trust_pickle`."""
-    from ..pilots import NAMES
-
     if isinstance(model, str) and model in NAMES:
-        return _PilotPlayer(model), {"obs_type": "features", **env_options}
+        return _BuiltinPlayer(model), {"obs_type": "features", **env_options}
     path = Path(model)
     if not path.is_file():
         raise ValueError(
             f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.learn.train, an SB3 .zip, "
-            f"or a pilot name: {', '.join(NAMES)})"
+            f"or a built-in policy: {', '.join(NAMES)})"
         )
     needs = ("torch", "stable_baselines3") if path.suffix == ".zip" else ("torch",)
     missing = [m for m in needs if importlib.util.find_spec(m) is None]
     if missing:
-        raise ValueError(f"reading model file {str(path)!r} needs {' and '.join(missing)}, which is not installed: "
-                         "pip install 'chopperscape[train]'")
+        raise ValueError(
+            f"reading model file {str(path)!r} needs {' and '.join(missing)}, which is not installed: "
+            "pip install 'chopperscape[train]'"
+        )
     if path.suffix == ".zip":
         return load_sb3(path, stochastic, env_options, trust_pickle)
     return load_recipe(path, stochastic, seed, env_options)
@@ -227,12 +235,16 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
         try:
             model = PPO.load(path, device="cpu", custom_objects=custom)
         except (RuntimeError, KeyError, TypeError, AttributeError) as e:
-            raise ValueError(f"{what} could not be read without unpickling ({str(e).splitlines()[0]}); pass "
-                             "--trust-pickle if you trust who made it") from None
+            raise ValueError(
+                f"{what} could not be read without unpickling ({str(e).splitlines()[0]}); pass "
+                "--trust-pickle if you trust who made it"
+            ) from None
     model_shape = tuple(model.observation_space.shape or ())
     if model_shape != shape:
-        raise ValueError(f"{what} takes observations of shape {model_shape}, but these env options give {shape} "
-                         f"({_describe(env_options)}): give the options it was trained with (--option ...)")
+        raise ValueError(
+            f"{what} takes observations of shape {model_shape}, but these env options give {shape} "
+            f"({_describe(env_options)}): give the options it was trained with (--option ...)"
+        )
     norm = sb3.load_normalization(path.parent, trust_pickle)
 
     def act(obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
@@ -243,22 +255,37 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.evaluate", description=__doc__.splitlines()[0])
-    p.add_argument("model", help="model.pt from chopperscape.learn.train, an SB3 .zip, or a pilot name (a file named like "
-                                 "a pilot: ./NAME)")
+    p.add_argument(
+        "model",
+        help="model.pt from chopperscape.learn.train, an SB3 .zip, or a built-in policy's name (a file "
+        "named like one: ./NAME)",
+    )
     p.add_argument("--episodes", type=int, default=100, help="episodes to play (default 100)")
     p.add_argument("--seed", type=int, default=1_000_000, help="first seed (default 1000000, held out from training)")
     p.add_argument("--stochastic", action="store_true", help="sample actions instead of taking the greedy one")
-    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
-                   help="env option, as the command line's flags take it (obs_size=84x84, hud=false, "
-                        "max_episode_steps=none)")
+    p.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="env option, as the command line's flags take it (obs_size=84x84, hud=false, max_episode_steps=none)",
+    )
     p.add_argument("--per-episode", action="store_true", help="also list every episode")
-    p.add_argument("--video", metavar="FILE", help="also write the first episodes as a video: .gif (Pillow) or .mp4 "
-                                                   "(needs the ffmpeg program); an existing file is replaced")
-    p.add_argument("--video-episodes", type=int, default=1, metavar="K",
-                   help="episodes in the --video, from the first (default 1)")
-    p.add_argument("--trust-pickle", action="store_true",
-                   help="allow pickled parts of an SB3 .zip and a vecnormalize.pkl beside it: pickles run code when "
-                        "loaded, so only for files whose author you trust")
+    p.add_argument(
+        "--video",
+        metavar="FILE",
+        help="also write the first episodes as a video: .gif (Pillow) or .mp4 "
+        "(needs the ffmpeg program); an existing file is replaced",
+    )
+    p.add_argument(
+        "--video-episodes", type=int, default=1, metavar="K", help="episodes in the --video, from the first (default 1)"
+    )
+    p.add_argument(
+        "--trust-pickle",
+        action="store_true",
+        help="allow pickled parts of an SB3 .zip and a vecnormalize.pkl beside it: pickles run code when "
+        "loaded, so only for files whose author you trust",
+    )
     a = p.parse_args(argv)
     if a.episodes < 1:
         p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
@@ -287,7 +314,7 @@ def main(argv: list[str] | None = None) -> int:
     for r in results:
         r.pop("actions", None)
     out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
-    if not isinstance(act, _PilotPlayer):
+    if not isinstance(act, _BuiltinPlayer):
         out["greedy"] = not a.stochastic
     if limit != 10_000:
         out["max_episode_steps"] = limit

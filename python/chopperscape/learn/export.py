@@ -99,14 +99,16 @@ def _policy_module(agent, norm, model_shape: tuple[int, ...], env_shape: tuple[i
         def forward(self, obs: torch.Tensor) -> torch.Tensor:
             x = obs.reshape(-1, *model_shape) if self.reshape else obs
             if self.normalise:
-                x = torch.clamp((x.float() - self.mean) * self.inv_std, -10.0, 10.0)
+                mean, inv_std = self.get_buffer("mean"), self.get_buffer("inv_std")
+                x = torch.clamp((x.float() - mean) * inv_std, -10.0, 10.0)
             return self.actor(x)
 
     return Policy().eval()
 
 
-def record_observations(payload: dict[str, Any], agent, norm, options: dict[str, Any], n: int = CHECK_OBSERVATIONS,
-                        seed: int = 0) -> np.ndarray:
+def record_observations(
+    payload: dict[str, Any], agent, norm, options: dict[str, Any], n: int = CHECK_OBSERVATIONS, seed: int = 0
+) -> np.ndarray:
     """`n` observations met by playing the env greedily with the policy (8 envs, seeds `seed + i`, autoreset)."""
     import torch
 
@@ -171,8 +173,14 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)
             torch.onnx.export(
-                module, (example,), str(tmp), input_names=["obs"], output_names=["logits"],
-                dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}}, opset_version=OPSET, dynamo=False,
+                module,
+                (example,),
+                str(tmp),
+                input_names=["obs"],
+                output_names=["logits"],
+                dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}},
+                opset_version=OPSET,
+                dynamo=False,
             )
         graph = onnx.load(str(tmp))
         del graph.metadata_props[:]
@@ -181,8 +189,13 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         graph.producer_name = "chopperscape.learn.export"
         onnx.checker.check_model(graph)
         onnx.save(graph, str(tmp))
-        result: dict[str, Any] = {"model": str(model), "out": str(out), "obs_type": obs_type,
-                                  "obs_shape": list(env_shape), "bytes": tmp.stat().st_size}
+        result: dict[str, Any] = {
+            "model": str(model),
+            "out": str(out),
+            "obs_type": obs_type,
+            "obs_shape": list(env_shape),
+            "bytes": tmp.stat().st_size,
+        }
         if check:
             result.update(check_export(tmp, payload, agent, norm, options))
         os.replace(tmp, out)

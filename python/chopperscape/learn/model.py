@@ -31,6 +31,7 @@ from .recipe import Recipe, network_of
 #: The checkpoint format this module writes and reads.
 FORMAT = "chopperscape-ppo/1"
 
+
 class RunningMeanStd(_GymRunningMeanStd):
     """Gymnasium's running mean and variance (Chan et al.'s parallel update, the one its and SB3's normalisers keep),
     with its state as plain data for checkpoints."""
@@ -101,11 +102,17 @@ class Agent(ActorCritic):
     def __init__(self, obs_dim: int, num_actions: int, hidden: int):
         super().__init__()
         self.critic = nn.Sequential(
-            _layer(nn.Linear(obs_dim, hidden)), nn.Tanh(), _layer(nn.Linear(hidden, hidden)), nn.Tanh(),
+            _layer(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
             _layer(nn.Linear(hidden, 1), 1.0),
         )
         self.actor = nn.Sequential(
-            _layer(nn.Linear(obs_dim, hidden)), nn.Tanh(), _layer(nn.Linear(hidden, hidden)), nn.Tanh(),
+            _layer(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
             _layer(nn.Linear(hidden, num_actions), 0.01),
         )
 
@@ -160,9 +167,7 @@ class CnnAgent(ActorCritic):
         self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
 
 
-def build_agent(
-    network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128
-) -> ActorCritic:
+def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128) -> ActorCritic:
     """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's)."""
     if network == "mlp":
         if len(obs_shape) != 1:
@@ -195,7 +200,8 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
         raise bad("num_actions/recipe.obs_type", "must be 5 actions and an observation type")
     shape = payload.get("obs_shape", [obs_dim])
     if (
-        not isinstance(shape, list) or not 1 <= len(shape) <= 3
+        not isinstance(shape, list)
+        or not 1 <= len(shape) <= 3
         or not all(isinstance(d, int) and not isinstance(d, bool) and 1 <= d <= 4096 for d in shape)
         or math.prod(shape) != obs_dim
     ):
@@ -221,8 +227,10 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
         try:
             getattr(agent, part).load_state_dict(state)
         except RuntimeError as e:
-            raise bad(part, f"does not fit the {network} network on observations of shape {tuple(shape)}: "
-                            f"{str(e).splitlines()[0]}") from None
+            raise bad(
+                part,
+                f"does not fit the {network} network on observations of shape {tuple(shape)}: {str(e).splitlines()[0]}",
+            ) from None
     return agent.eval()
 
 
@@ -279,10 +287,12 @@ def read_checkpoint(path: Path, what: str) -> Any:
     crafted file cannot run code); `ValueError` in one line when the file is damaged or holds more."""
     try:
         return torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:  # noqa: BLE001 - every way a file can fail to be a model is the same answer
+    except Exception as err:
         first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-        raise ValueError(f"{what} is not a chopperscape.learn.train model (it holds more than tensors and plain data, "
-                         f"or is damaged): {first}") from None
+        raise ValueError(
+            f"{what} is not a chopperscape.learn.train model (it holds more than tensors and plain data, "
+            f"or is damaged): {first}"
+        ) from None
 
 
 class Model(NamedTuple):
@@ -308,8 +318,10 @@ def from_payload(payload: Any, what: str = "the checkpoint") -> Model:
         except (KeyError, TypeError, ValueError):
             ok = False
         if not ok:
-            raise ValueError(f"{what} is not a usable chopperscape.learn.train model: `obs_rms` must hold a mean and a "
-                             f"variance of shape {shape}")
+            raise ValueError(
+                f"{what} is not a usable chopperscape.learn.train model: `obs_rms` must hold a mean and a "
+                f"variance of shape {shape}"
+            )
     return Model(agent, shape, norm, recipe)
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .progress import read
 
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.plot", description=__doc__.splitlines()[0])
     p.add_argument("csv", nargs="+", type=Path)
@@ -53,8 +54,15 @@ def main(argv: list[str] | None = None) -> int:
         name, _, value = item.partition("=")
         for ax in (ax_steps, ax_time):
             ax.axhline(float(value), linestyle="--", color="grey", linewidth=1)
-        ax_time.annotate(name, (1, float(value)), xycoords=("axes fraction", "data"), xytext=(-3, 3),
-                         textcoords="offset points", ha="right", color="grey")
+        ax_time.annotate(
+            name,
+            (1, float(value)),
+            xycoords=("axes fraction", "data"),
+            xytext=(-3, 3),
+            textcoords="offset points",
+            ha="right",
+            color="grey",
+        )
     ax_steps.set_xlabel("env steps (millions)")
     ax_time.set_xlabel("wall-clock minutes (2-core machine)")
     ax_steps.set_ylabel("mean return")

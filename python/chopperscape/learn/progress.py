@@ -34,8 +34,9 @@ class Writer:
     def __init__(self, path: str | os.PathLike, columns: Sequence[str] = COLUMNS):
         unknown = [c for c in columns if c not in COLUMNS]
         if unknown or list(columns[: len(RETURNS)]) != list(RETURNS):
-            raise ValueError(f"progress columns must start with {list(RETURNS)} and come from {list(COLUMNS)}; "
-                             f"got {list(columns)}")
+            raise ValueError(
+                f"progress columns must start with {list(RETURNS)} and come from {list(COLUMNS)}; got {list(columns)}"
+            )
         self.columns = tuple(columns)
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         self._file: TextIO = open(path, "w", newline="")

@@ -12,13 +12,28 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .._checks import check_bool, number_in, pilot_seed, positive_int
+from .._checks import check_bool, number_in, policy_seed, positive_int
 from .._cli import ENV_OPTIONS
 
 #: The recipe's settings that the command line exposes as flags (``--num-envs`` …).
 RECIPE_FLAGS = (
-    "obs_type", "num_envs", "num_steps", "gamma", "gae_lambda", "learning_rate", "update_epochs", "num_minibatches",
-    "clip_coef", "ent_coef", "vf_coef", "max_grad_norm", "hidden", "seed", "torch_threads", "env_threads", "network",
+    "obs_type",
+    "num_envs",
+    "num_steps",
+    "gamma",
+    "gae_lambda",
+    "learning_rate",
+    "update_epochs",
+    "num_minibatches",
+    "clip_coef",
+    "ent_coef",
+    "vf_coef",
+    "max_grad_norm",
+    "hidden",
+    "seed",
+    "torch_threads",
+    "env_threads",
+    "network",
     "device",
 )
 
@@ -107,8 +122,10 @@ def check_device(device: Any) -> None:
         raise ValueError(f"invalid value {device!r} for option `device`: {allowed}") from None
     if d.type == "cuda":
         if not torch.cuda.is_available():
-            raise ValueError(f"device {device!r}: torch sees no CUDA GPU here (torch.cuda.is_available() is False; "
-                             "a CPU-only torch build, or no driver): use --device cpu")
+            raise ValueError(
+                f"device {device!r}: torch sees no CUDA GPU here (torch.cuda.is_available() is False; "
+                "a CPU-only torch build, or no driver): use --device cpu"
+            )
         if d.index is not None and d.index >= torch.cuda.device_count():
             raise ValueError(f"device {device!r}: torch sees {torch.cuda.device_count()} CUDA GPU(s)")
     elif d.type == "mps" and not torch.backends.mps.is_available():
@@ -138,7 +155,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("ent_coef", r.ent_coef, 0.0, 1000.0)
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
     number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
-    pilot_seed(r.seed)
+    policy_seed(r.seed)
     for name in ("anneal_lr", "norm_obs", "norm_reward"):
         check_bool(name, getattr(r, name))
     if not isinstance(r.obs_type, str):

@@ -6,7 +6,8 @@
 Every seed ``K`` is trained into ``OUT/seed-K`` by ``python -m chopperscape.learn.train`` (any other flag, such as
 ``--ent-coef 0.02`` or ``--option frame_skip=4``, is passed on to it), ``--jobs`` at a time, then evaluated greedily
 on the same held-out seeds (``--eval-episodes 100`` from ``--eval-seed 1000000``) into ``OUT/seed-K/eval.json``. The
-``random`` and ``heuristic`` pilots are evaluated on those seeds too. A seed whose evaluation is already there with
+``random`` and ``heuristic`` built-in policies are evaluated on those seeds too. A seed whose evaluation is
+already there with
 the same settings is not run again, so an interrupted runner resumes where it stopped.
 
 It then writes:
@@ -47,7 +48,11 @@ RESAMPLES = 50_000
 
 def parse_seeds(text: str) -> list[int]:
     """``"0-9"``, ``"0,3,5"`` or ``"1,0,2-9"`` as a list of distinct seeds in the order given (the order they are
-    trained in); `ValueError` naming the item."""
+    trained in); `ValueError` naming the item.
+
+    >>> parse_seeds("3,1,0-2")
+    [3, 1, 0, 2]
+    """
     seeds: dict[int, None] = {}
     for item in text.split(","):
         lo, dash, hi = item.strip().partition("-")
@@ -65,7 +70,11 @@ def parse_seeds(text: str) -> list[int]:
 
 
 def iqm(x: np.ndarray, axis: int = -1) -> np.ndarray:
-    """Interquartile mean along `axis`: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``)."""
+    """Interquartile mean along `axis`: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``).
+
+    >>> float(iqm(np.array([0.0, 10.0, 20.0, 30.0, 1000.0, -1000.0, 40.0, 50.0])))
+    25.0
+    """
     x = np.sort(np.asarray(x, dtype=np.float64), axis=axis)
     n = x.shape[axis]
     cut = int(0.25 * n)
@@ -76,7 +85,12 @@ def bootstrap_ci(
     x: np.ndarray, stat=iqm, resamples: int = RESAMPLES, level: float = 0.95, seed: int = 0
 ) -> tuple[float, float]:
     """Percentile bootstrap interval of `stat` over runs (the last axis of `x` is the runs; earlier axes, such as
-    points of a curve, are resampled together)."""
+    points of a curve, are resampled together).
+
+    >>> lo, hi = bootstrap_ci(np.array([5000.0, 6000.0, 6500.0, 7000.0]), resamples=2000)
+    >>> bool(5000 <= lo <= hi <= 7000)
+    True
+    """
     x = np.asarray(x, dtype=np.float64)
     n = x.shape[-1]
     rng = np.random.default_rng(seed)
@@ -95,8 +109,17 @@ def _run(what: str, cmd: list[str], log: Path) -> None:
 
 
 def _evaluate(model: str, out: Path, episodes: int, seed: int, options: list[str], log: Path) -> dict[str, Any]:
-    cmd = [sys.executable, "-m", "chopperscape.learn.evaluate", model, "--episodes", str(episodes), "--seed", str(seed),
-           "--per-episode"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "chopperscape.learn.evaluate",
+        model,
+        "--episodes",
+        str(episodes),
+        "--seed",
+        str(seed),
+        "--per-episode",
+    ]
     for o in options:
         cmd += ["--option", o]
     tmp = out.with_name(f".{out.name}.part")
@@ -119,11 +142,23 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
             return prev
     run.mkdir(parents=True, exist_ok=True)
     # --force: what is in the folder is an interrupted run of this seed (a finished one has its eval.json).
-    cmd = [sys.executable, "-m", "chopperscape.learn.train", "--out", str(run), "--seed", str(seed), "--steps",
-           str(a.steps), "--force", *forward]
+    cmd = [
+        sys.executable,
+        "-m",
+        "chopperscape.learn.train",
+        "--out",
+        str(run),
+        "--seed",
+        str(seed),
+        "--steps",
+        str(a.steps),
+        "--force",
+        *forward,
+    ]
     _run(f"training seed {seed}", cmd, run / "train.log")
-    result = _evaluate(str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option,
-                       run / "train.log")
+    result = _evaluate(
+        str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option, run / "train.log"
+    )
     result["runner"] = key
     tmp = run / ".eval.json.part"
     tmp.write_text(json.dumps(result))
@@ -139,8 +174,9 @@ def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
         prev = json.loads(path.read_text())
         if prev.get("runner") == key:
             return prev
-    result = _evaluate(name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.option,
-                       a.out / f"baseline-{name}.log")
+    result = _evaluate(
+        name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.option, a.out / f"baseline-{name}.log"
+    )
     result["runner"] = key
     path.write_text(json.dumps(result))
     (a.out / f".baseline-{name}.raw").unlink(missing_ok=True)
@@ -167,10 +203,14 @@ def summarise(results: dict[int, dict[str, Any]], baselines: dict[str, dict[str,
         "mean": round(float(means.mean()), 1),
         "min": round(float(means.min()), 1),
         "above_heuristic": int((means > heuristic).sum()),
-        "baselines": {k: {"mean_return": v["mean_return"], "std_return": v["std_return"]} for k, v in baselines.items()},
+        "baselines": {
+            k: {"mean_return": v["mean_return"], "std_return": v["std_return"]} for k, v in baselines.items()
+        },
         "per_seed": {
-            str(s): {k: results[s][k] for k in ("mean_return", "std_return", "min_return", "max_return", "mean_steps",
-                                                  "causes")}
+            str(s): {
+                k: results[s][k]
+                for k in ("mean_return", "std_return", "min_return", "max_return", "mean_steps", "causes")
+            }
             for s in sorted(results)
         },
     }
@@ -192,7 +232,7 @@ def markdown(summary: dict[str, Any]) -> str:
             f"{c.get('bird', 0):.0%} / {c.get('fuel', 0):.0%} / {c.get('truncated', 0):.0%} |"
         )
     for name, b in summary["baselines"].items():
-        lines.append(f"| *{name} pilot* | {b['mean_return']:,.0f} ± {b['std_return']:,.0f} | | | |")
+        lines.append(f"| *{name} policy* | {b['mean_return']:,.0f} ± {b['std_return']:,.0f} | | | |")
     lo, hi = summary["iqm_ci95"]
     n = len(summary["per_seed"])
     lines += [
@@ -220,7 +260,7 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | No
     grid = np.linspace(0, top, 101)[1:]
     fig, ax = plt.subplots(figsize=(8, 4.5))
     ys = []
-    for s, (x, y) in sorted(curves.items()):
+    for _, (x, y) in sorted(curves.items()):
         ax.plot(x / 1e6, y, color="tab:blue", alpha=0.25, linewidth=0.8)
         ys.append(np.interp(grid, x, y, left=np.nan))
     stack = np.array(ys).T  # (points, runs)
@@ -231,13 +271,22 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | No
     ax.fill_between(grid[ok] / 1e6, lo, hi, color="tab:blue", alpha=0.2, linewidth=0)
     for name, b in summary["baselines"].items():
         ax.axhline(b["mean_return"], linestyle="--", color="grey", linewidth=1)
-        ax.annotate(name, (1, b["mean_return"]), xycoords=("axes fraction", "data"), xytext=(-3, 3),
-                    textcoords="offset points", ha="right", color="grey")
+        ax.annotate(
+            name,
+            (1, b["mean_return"]),
+            xycoords=("axes fraction", "data"),
+            xytext=(-3, 3),
+            textcoords="offset points",
+            ha="right",
+            color="grey",
+        )
     ax.set_xlabel("env steps (millions)")
     ax.set_ylabel("mean return, last 100 training episodes")
-    ax.set_title(f"ChopperScape-v0 PPO recipe: {len(curves)} training seeds "
-                 f"(held-out IQM {summary['iqm']:,.0f} [{summary['iqm_ci95'][0]:,.0f}–{summary['iqm_ci95'][1]:,.0f}])",
-                 fontsize="medium")
+    ax.set_title(
+        f"ChopperScape-v0 PPO recipe: {len(curves)} training seeds "
+        f"(held-out IQM {summary['iqm']:,.0f} [{summary['iqm_ci95'][0]:,.0f}–{summary['iqm_ci95'][1]:,.0f}])",
+        fontsize="medium",
+    )
     ax.legend(loc="upper left", fontsize="small")
     ax.grid(alpha=0.3)
     fig.tight_layout()
@@ -250,8 +299,11 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | No
 def main(argv: list[str] | None = None) -> int:
     from .recipe import DEFAULT_STEPS
 
-    p = argparse.ArgumentParser(prog="python -m chopperscape.learn.seeds", description=__doc__.splitlines()[0],
-                                epilog="Other flags are passed on to python -m chopperscape.learn.train.")
+    p = argparse.ArgumentParser(
+        prog="python -m chopperscape.learn.seeds",
+        description=__doc__.splitlines()[0],
+        epilog="Other flags are passed on to python -m chopperscape.learn.train.",
+    )
     p.add_argument("--seeds", required=True, help="training seeds, e.g. 0-9 or 0,3,5")
     p.add_argument("--out", type=Path, required=True, help="folder: seed-K/ per seed, summary.json, summary.md")
     p.add_argument("--steps", type=int, default=DEFAULT_STEPS, help=f"env steps per seed (default {DEFAULT_STEPS:,})")

@@ -1,12 +1,13 @@
 """PPO for ChopperScape: the training loop and its command line (CleanRL-style sections, PyTorch).
 
-Run it with ``python -m chopperscape.learn.train --steps 15000000 --out runs/ppo`` once the package and torch are installed.
-It steps the native :class:`chopperscape.VectorEnv` (one Rust call per batch), normalises observations with
+Run it with ``python -m chopperscape.learn.train --steps 15000000 --out runs/ppo`` once the package and torch are
+installed. It steps the native :class:`chopperscape.VectorEnv` (one Rust call per batch), normalises observations with
 running statistics and rewards by the running standard deviation of the discounted return (the two things that made
 the difference: see ``docs/learning.md``), and writes as it goes:
 
-- ``OUT/progress.csv``: one row per update (the schema: :mod:`chopperscape.learn.progress`): the return and length of the last 100
-  finished episodes (empty until one has ended) (the format ``python -m chopperscape.learn.plot`` draws), the update's diagnostics (learning rate,
+- ``OUT/progress.csv``: one row per update (the schema: :mod:`chopperscape.learn.progress`, the format
+  ``python -m chopperscape.learn.plot`` draws): the return and length of the last 100 finished episodes (empty until
+  one has ended), the update's diagnostics (learning rate,
   policy entropy, approximate KL, clip fraction, explained variance, value and policy losses) and how the episodes
   that ended during the update ended (shares of ``bird``, ``fuel`` and ``limit``, the 10,000-step truncation);
 - ``OUT/model.pt``: the policy, its observation statistics and the options it was trained on, loadable by
@@ -79,9 +80,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     torch.set_num_threads(recipe.torch_threads)
     rng = np.random.default_rng(recipe.seed)
 
-    envs = VectorEnv(
-        recipe.num_envs, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options
-    )
+    envs = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options)
     obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
@@ -219,16 +218,26 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             # --- Logging -----------------------------------------------------------------------------------------
             # One row per update; the return columns stay empty until the first episode has ended.
             rets = np.array([r for r, _ in finished])
-            lens = np.array([l for _, l in finished])
+            lens = np.array([n for _, n in finished])
             ended = sum(ends.values())
             m = stats[:5] / max(stats[5], 1)
-            row = {"env_steps": env_steps, "wall_s": f"{time.monotonic() - start:.1f}", "episodes": episodes,
-                   "learning_rate": f"{lr:.6g}", "entropy": f"{m[0]:.4f}", "approx_kl": f"{m[1]:.5f}",
-                   "clip_frac": f"{m[2]:.4f}", "explained_var": f"{explained:.4f}", "value_loss": f"{m[3]:.5f}",
-                   "policy_loss": f"{m[4]:.5f}", "ended": ended}
+            row = {
+                "env_steps": env_steps,
+                "wall_s": f"{time.monotonic() - start:.1f}",
+                "episodes": episodes,
+                "learning_rate": f"{lr:.6g}",
+                "entropy": f"{m[0]:.4f}",
+                "approx_kl": f"{m[1]:.5f}",
+                "clip_frac": f"{m[2]:.4f}",
+                "explained_var": f"{explained:.4f}",
+                "value_loss": f"{m[3]:.5f}",
+                "policy_loss": f"{m[4]:.5f}",
+                "ended": ended,
+            }
             if finished:
-                row.update(mean_return=f"{rets.mean():.1f}", std_return=f"{rets.std():.1f}",
-                           mean_length=f"{lens.mean():.1f}")
+                row.update(
+                    mean_return=f"{rets.mean():.1f}", std_return=f"{rets.std():.1f}", mean_length=f"{lens.mean():.1f}"
+                )
             if ended:
                 row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
             writer.row(row)
@@ -251,23 +260,53 @@ def main(argv: list[str] | None = None) -> int:
 
         return seeds.main(args)
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=__doc__.splitlines()[0])
-    p.add_argument("--out", type=Path, required=True,
-                   help="folder for progress.csv, model.pt, recipe.json (with --seeds: one sub-folder per seed)")
-    p.add_argument("--steps", type=int, default=DEFAULT_STEPS,
-                   help=f"env-step budget; the learning rate anneals over it (default {DEFAULT_STEPS:,})")
-    p.add_argument("--minutes", type=float, default=None,
-                   help="stop after this much wall time (only stops: the schedule still follows --steps)")
-    p.add_argument("--seeds", default=None, metavar="LIST",
-                   help="train these seeds (e.g. 0-9 or 0,3,5), evaluate each on held-out seeds and write a summary "
-                   "(runs python -m chopperscape.learn.seeds, which documents its own flags: --jobs, --eval-episodes, ...)")
-    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
-                   help="an env option, e.g. --option frame_skip=4 (JSON values)")
-    p.add_argument("--preset", choices=sorted(PRESETS), default="features",
-                   help="recipe preset: features (the default), pixels (grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it")
+    p.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="folder for progress.csv, model.pt, recipe.json (with --seeds: one sub-folder per seed)",
+    )
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=DEFAULT_STEPS,
+        help=f"env-step budget; the learning rate anneals over it (default {DEFAULT_STEPS:,})",
+    )
+    p.add_argument(
+        "--minutes",
+        type=float,
+        default=None,
+        help="stop after this much wall time (only stops: the schedule still follows --steps)",
+    )
+    p.add_argument(
+        "--seeds",
+        default=None,
+        metavar="LIST",
+        help="train these seeds (e.g. 0-9 or 0,3,5), evaluate each on held-out seeds and write a summary "
+        "(runs python -m chopperscape.learn.seeds, which documents its own flags: --jobs, --eval-episodes, ...)",
+    )
+    p.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="an env option, e.g. --option frame_skip=4 (JSON values)",
+    )
+    p.add_argument(
+        "--preset",
+        choices=sorted(PRESETS),
+        default="features",
+        help="recipe preset: features (the default), pixels (grayscale frames, a CNN) or pixels-large (the same "
+        "with 256 envs, for --device cuda); flags override it",
+    )
     defaults = Recipe()
     for f in RECIPE_FLAGS:
-        p.add_argument(f"--{f.replace('_', '-')}", type=type(getattr(defaults, f)), default=None,
-                       help=f"default {getattr(defaults, f)!r} (or the preset's)")
+        p.add_argument(
+            f"--{f.replace('_', '-')}",
+            type=type(getattr(defaults, f)),
+            default=None,
+            help=f"default {getattr(defaults, f)!r} (or the preset's)",
+        )
     p.add_argument("--no-norm-obs", action="store_true")
     p.add_argument("--no-norm-reward", action="store_true")
     p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
@@ -278,7 +317,10 @@ def main(argv: list[str] | None = None) -> int:
     settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
     settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
     recipe = Recipe(
-        **settings, env_options=options, norm_obs=not a.no_norm_obs, norm_reward=not a.no_norm_reward,
+        **settings,
+        env_options=options,
+        norm_obs=not a.no_norm_obs,
+        norm_reward=not a.no_norm_reward,
         total_steps=a.steps,
     )
     try:

@@ -14,8 +14,9 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -36,8 +37,9 @@ def check_destination(path: Path) -> None:
     if not folder.is_dir():
         raise ValueError(f"--video {str(path)!r}: the folder {str(folder)!r} does not exist")
     if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise ValueError(f"--video {str(path)!r}: writing .mp4 needs the ffmpeg program on PATH (install ffmpeg, "
-                         "or write a .gif)")
+        raise ValueError(
+            f"--video {str(path)!r}: writing .mp4 needs the ffmpeg program on PATH (install ffmpeg, or write a .gif)"
+        )
 
 
 def frames(options: dict[str, Any], episodes: list[dict[str, Any]]) -> Iterator[np.ndarray]:
@@ -51,10 +53,10 @@ def frames(options: dict[str, Any], episodes: list[dict[str, Any]]) -> Iterator[
     try:
         for episode in episodes:
             env.reset(seed=episode["seed"])
-            yield env.render()
+            yield _frame(env)
             for action in episode["actions"]:
                 env.step(action)
-                yield env.render()
+                yield _frame(env)
     finally:
         env.close()
 
@@ -116,8 +118,29 @@ def _write_gif(path: Path, source: Iterator[np.ndarray]) -> int:
 def _write_mp4(path: Path, source: Iterator[np.ndarray]) -> int:
     first = next(source)
     h, w, _ = first.shape
-    cmd = ["ffmpeg", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", f"{w}x{h}",
-           "-r", str(FPS), "-i", "-", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4", str(path)]
+    cmd = [
+        "ffmpeg",
+        "-loglevel",
+        "error",
+        "-y",
+        "-f",
+        "rawvideo",
+        "-pix_fmt",
+        "rgb24",
+        "-s",
+        f"{w}x{h}",
+        "-r",
+        str(FPS),
+        "-i",
+        "-",
+        "-c:v",
+        "libx264",
+        "-pix_fmt",
+        "yuv420p",
+        "-f",
+        "mp4",
+        str(path),
+    ]
     count = 0
     # ffmpeg says little (-loglevel error), so its standard error is read once it has all the frames.
     with subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
@@ -139,3 +162,10 @@ def _write_mp4(path: Path, source: Iterator[np.ndarray]) -> int:
 def _chain(first: np.ndarray, rest: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
     yield first
     yield from rest
+
+
+def _frame(env: Any) -> np.ndarray:
+    """The env's rgb_array frame (never None: the env is made with render_mode="rgb_array")."""
+    frame = env.render()
+    assert frame is not None
+    return frame

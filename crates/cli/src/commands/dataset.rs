@@ -1,7 +1,7 @@
 //! `chopperscape dataset`: episodes of a built-in policy (or replayed action logs) as a Minari dataset.
 //!
 //! Minari's on-disk format (HDF5 plus JSON metadata) is written by Minari's own Python classes, so this command
-//! runs the Python package: `python -m chopperscape.datasets` with the same arguments. It needs the `chopperscape`
+//! runs the Python package: `python -m chopperscape.integrations.datasets` with the same arguments. It needs the `chopperscape`
 //! Python package and `minari[hdf5]` in the interpreter named by `CHOPPERSCAPE_PYTHON` (default `python3`), and
 //! says so when they are missing.
 //!
@@ -28,7 +28,7 @@ pub const PYTHON_VAR: &str = "CHOPPERSCAPE_PYTHON";
 ///
 /// Episode i is played from seed S+i with the policy seeded S+i, exactly as `demo` plays it. The dataset goes
 /// under MINARI_DATASETS_PATH (default ~/.minari/datasets), where `minari.load_dataset(NAME)` finds it; an
-/// existing dataset is never overwritten. The work is done by `python -m chopperscape.datasets` in the
+/// existing dataset is never overwritten. The work is done by `python -m chopperscape.integrations.datasets` in the
 /// interpreter named by CHOPPERSCAPE_PYTHON (default python3), which needs `pip install chopperscape
 /// "minari[hdf5]" pillow`.
 #[derive(Args, Debug)]
@@ -75,7 +75,7 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode> {
     }
     check_python(&python)?;
     let mut cmd = Command::new(&python);
-    cmd.args(["-m", "chopperscape.datasets", "--out", &args.out]);
+    cmd.args(["-m", "chopperscape.integrations.datasets", "--out", &args.out]);
     let mut option = |name: &str, value: &str| {
         cmd.args(["--option", &format!("{name}={value}")]);
     };
@@ -138,7 +138,7 @@ fn exit_status(status: ExitStatus) -> u8 {
 /// Fails with what to install when `python` cannot import the package and Minari.
 fn check_python(python: &str) -> Result<()> {
     let probe = Command::new(python)
-        .args(["-c", "import chopperscape.datasets as d; d._minari()"])
+        .args(["-c", "import chopperscape.integrations.datasets as d; d._minari()"])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .output();
@@ -152,7 +152,7 @@ fn check_python(python: &str) -> Result<()> {
         Ok(out) if !out.status.success() => {
             let err = String::from_utf8_lossy(&out.stderr);
             let last = err.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").trim();
-            anyhow::bail!("`{python}` cannot import chopperscape.datasets ({last}): {hint}")
+            anyhow::bail!("`{python}` cannot import chopperscape.integrations.datasets ({last}): {hint}")
         }
         Ok(_) => Ok(()),
     }

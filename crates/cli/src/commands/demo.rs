@@ -35,7 +35,7 @@ pub enum Render {
 /// current folder (that default file is replaced on every run; a file named with --out is never overwritten
 /// without --force). Episodes use seeds S, S+1, …; the random policy's own generator is seeded from the
 /// episode's seed too, so every run with the same flags is identical. A trained policy (--policy NAME.onnx,
-/// from python -m chopperscape.export) plays greedily under the options it was trained with; a game option
+/// from python -m chopperscape.learn.export) plays greedily under the options it was trained with; a game option
 /// given here that changes one of them is used, with a warning.
 #[derive(Args, Debug)]
 #[command(after_help = "Examples:\n  chopperscape demo\n  \
@@ -46,7 +46,7 @@ With --json, each episode prints one line:\n  \
 {\"episode\": 0, \"seed\": 0, \"steps\": 312, \"return\": 302, \"cause\": \"bird\"}")]
 pub struct DemoArgs {
     /// The policy: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
-    /// exported by python -m chopperscape.export (NAME.onnx)
+    /// exported by python -m chopperscape.learn.export (NAME.onnx)
     #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "NAME|FILE.onnx")]
     pub policy: PolicyArg,
     /// Number of episodes, at least 1

@@ -24,7 +24,7 @@ pub fn policy_name_parser() -> PossibleValuesParser {
     PossibleValuesParser::new(chopperscape::policy::NAMES)
 }
 
-/// What `--policy` names: a built-in policy, or a trained policy exported by `python -m chopperscape.export`.
+/// What `--policy` names: a built-in policy, or a trained policy exported by `python -m chopperscape.learn.export`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PolicyArg {
     /// A built-in policy (`chopperscape::policy::NAMES`).
@@ -44,7 +44,7 @@ pub fn policy_parser(s: &str) -> Result<PolicyArg, String> {
     } else {
         Err(format!(
             "{s:?} is not a built-in policy: give one of {}, or an exported policy file (NAME.onnx, from python -m \
-             chopperscape.export)",
+             chopperscape.learn.export)",
             names.join(", ")
         ))
     }

@@ -16,7 +16,7 @@ use crate::{actionlog, output, progress, usage_bail};
 /// Record one episode of a built-in or a trained policy.
 ///
 /// The episode is played headless first, then replayed to draw its frames (it is deterministic), so the
-/// progress bar knows its length. A trained policy (--policy NAME.onnx, from python -m chopperscape.export)
+/// progress bar knows its length. A trained policy (--policy NAME.onnx, from python -m chopperscape.learn.export)
 /// plays greedily under the options it was trained with; a game option given here that changes one of them is
 /// used, with a warning. Nothing is overwritten without --force; every file is written under a
 /// temporary name beside its destination and renamed when complete.
@@ -27,7 +27,7 @@ chopperscape record --policy heuristic --frames frames/\n  \
 chopperscape record --policy models/ppo-features.onnx --seed 3 --out agent.gif")]
 pub struct RecordArgs {
     /// The policy: random, heuristic, a fixed action (right, left, down, up, noop), or a trained policy
-    /// exported by python -m chopperscape.export (NAME.onnx)
+    /// exported by python -m chopperscape.learn.export (NAME.onnx)
     #[arg(long, default_value = "random", value_parser = policy_parser, value_name = "NAME|FILE.onnx")]
     pub policy: PolicyArg,
     /// Seed of the episode (and of the random policy's own generator)
