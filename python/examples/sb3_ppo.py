@@ -1,10 +1,13 @@
 """Stable-Baselines3 PPO on ChopperScape through the native adapter, writing the recipe's progress CSV.
 
-    python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-default            # SB3's defaults
-    python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
+    python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-default                # SB3's defaults
+    python python/examples/sb3_ppo.py --steps 15000000 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
 
-`--tuned` uses what ``chopperscape.learn.train`` uses (γ = 0.999, 64 envs × 256 steps, entropy 0.01, [128, 128] tanh,
-observations and rewards normalised by ``VecNormalize``). The model is saved as ``OUT/model.zip`` (and, with
+`--tuned` uses what ``chopperscape.learn.train`` uses, read from :class:`chopperscape.learn.recipe.Recipe`'s defaults
+(γ, GAE λ, 64 envs × 256 steps, 8 minibatches, 4 epochs, clip, entropy and value coefficients, gradient clip,
+[128, 128] tanh, the learning rate annealed linearly to 5 % over ``--steps``, observations and rewards normalised by
+``VecNormalize``). ``--steps`` is the budget every schedule follows; ``--minutes`` only stops a run early.
+The model is saved as ``OUT/model.zip`` (and, with
 ``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
 ``python -m chopperscape.learn.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
 training with ``VecNormalize.load``); ``progress.csv`` has the return columns of
@@ -25,14 +28,15 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
 from chopperscape.learn import progress
+from chopperscape.learn.recipe import Recipe
 
 
 class ProgressCsv(BaseCallback):
     """Writes one CSV row per rollout (last 100 episodes) and stops at the time budget."""
 
-    def __init__(self, path: Path, minutes: float):
+    def __init__(self, path: Path, minutes: float | None):
         super().__init__()
-        self.path, self.deadline = path, minutes * 60
+        self.path, self.deadline = path, float("inf") if minutes is None else minutes * 60
         self.start = time.monotonic()
         self.episodes = 0
 
@@ -66,31 +70,44 @@ class ProgressCsv(BaseCallback):
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", type=Path, required=True)
-    p.add_argument("--minutes", type=float, default=30.0)
+    p.add_argument("--steps", type=int, default=None, help="env-step budget (the schedules follow it)")
+    p.add_argument(
+        "--minutes", type=float, default=None, help="stop after this much wall time (default 30 without --steps)"
+    )
     p.add_argument("--tuned", action="store_true", help="the recipe's hyperparameters instead of SB3's defaults")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1 is fastest for these small MLPs)")
     a = p.parse_args()
+    if a.steps is None and a.minutes is None:
+        a.minutes = 30.0
+    steps = a.steps or 10**10
     torch.set_num_threads(a.torch_threads)
     a.out.mkdir(parents=True, exist_ok=True)
     if a.tuned:
-        env = VecNormalize(ChopperScapeVecEnv(64, seed=a.seed, obs_type="features"), gamma=0.999)
+        r = Recipe()
+        env = VecNormalize(ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features"), gamma=r.gamma)
+        lr = r.learning_rate
         model = PPO(
             "MlpPolicy",
             env,
-            n_steps=256,
-            batch_size=2048,
-            n_epochs=4,
-            gamma=0.999,
-            ent_coef=0.01,
-            policy_kwargs={"net_arch": [128, 128]},
+            learning_rate=lambda remaining: lr * max(remaining, 0.05),
+            n_steps=r.num_steps,
+            batch_size=r.num_envs * r.num_steps // r.num_minibatches,
+            n_epochs=r.update_epochs,
+            gamma=r.gamma,
+            gae_lambda=r.gae_lambda,
+            clip_range=r.clip_coef,
+            ent_coef=r.ent_coef,
+            vf_coef=r.vf_coef,
+            max_grad_norm=r.max_grad_norm,
+            policy_kwargs={"net_arch": [r.hidden, r.hidden]},
             seed=a.seed,
             device="cpu",
         )
     else:
         env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="features")
         model = PPO("MlpPolicy", env, seed=a.seed, device="cpu")
-    model.learn(10**10, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
+    model.learn(steps, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
     model.save(a.out / "model.zip")
     if a.tuned:
         save_normalization(env, a.out / "vecnormalize.json")

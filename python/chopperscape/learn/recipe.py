@@ -39,8 +39,9 @@ RECIPE_FLAGS = (
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
 #: the command line win. ``pixels`` learns from 84×84 grayscale frames, 4 stacked, each action held for 4 frames
-#: (env steps then count decisions: a decision is 4 frames); γ = 0.996 per decision is the features recipe's
-#: 0.999 per frame (0.999⁴), the same horizon in game time. See docs/learning.md for how it was chosen.
+#: (env steps then count decisions: a decision is 4 frames); γ = 0.996 per decision is 0.999 per frame (0.999⁴),
+#: the features recipe's horizon when the preset was measured, and it keeps that run's entropy 0.01. See
+#: docs/learning.md for how it was chosen.
 PRESETS: dict[str, dict[str, Any]] = {
     "features": {},
     "pixels": {
@@ -51,6 +52,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "num_steps": 128,
         "num_minibatches": 4,
         "gamma": 0.996,
+        "ent_coef": 0.01,
         "learning_rate": 2.5e-4,
     },
 }
@@ -70,14 +72,16 @@ class Recipe:
     env_options: dict[str, Any] = field(default_factory=dict)
     num_envs: int = 64
     num_steps: int = 256
-    gamma: float = 0.999
+    #: 0.9995 and entropy 0.02: the setting that trained all ten seeds of the benchmark past the heuristic
+    #: (docs/learning.md, "Training seeds"); 0.999 and 0.01 stalled two seeds in five on refuelling.
+    gamma: float = 0.9995
     gae_lambda: float = 0.95
     learning_rate: float = 3e-4
     anneal_lr: bool = True
     update_epochs: int = 4
     num_minibatches: int = 8
     clip_coef: float = 0.2
-    ent_coef: float = 0.01
+    ent_coef: float = 0.02
     vf_coef: float = 0.5
     max_grad_norm: float = 0.5
     hidden: int = 128
