@@ -8,6 +8,10 @@ import numpy.typing as npt
 
 ACTION_MEANINGS: list[str]
 OPTION_NAMES: list[str]
+#: Every option of the core, in OPTION_NAMES order, described once: `name`, `default` (text, as `option_value`
+#: reads it), `allowed` (in words, as the errors say), `doc` (one line) and `rule` (a rules option, as action logs
+#: record, rather than an observation setting).
+OPTIONS: list[dict[str, Any]]
 CAUSE_NAMES: list[str]
 SNAPSHOT_VERSION: int
 #: The layout version of the `"features"` observation (the Rust docs of `chopperscape::features` give the history).

@@ -106,7 +106,7 @@ class ChopperScapeEnv(gym.Env):
     | `obs_type` | `"rgb"` | `"rgb"`, `"rgb_float"`, `"grayscale"`, `"features"` |
     | `obs_size` | `(600, 800)` | `(H, W)`, each in 8..=4096 |
     | `frame_stack` | 1 | 1..=64 |
-    | `hud` | `True` | draw the HUD (fuel and lives, see above) into pixel observations |
+    | `hud` | `True` | `True`, `False`: draw the HUD (fuel and lives, see above) into pixel observations |
     | `hud_style` | `"auto"` | `"auto"` (text in frames of at least 300 × 400, bars below), `"text"`, `"gauge"`; `render()` shows the text unless `"gauge"` |
     | `keep_dim` | `False` | give `"grayscale"` without stacking a channel axis, `(H, W, 1)` instead of `(H, W)` (what CNN policies such as SB3's `CnnPolicy` expect; a view, no copy) |
     | `lives` | 1 | 1..=1000 |
@@ -117,6 +117,7 @@ class ChopperScapeEnv(gym.Env):
     | `bird_prob` | 0.01 | [0, 1] |
     | `fuel_prob` | 0.01 | [0, 1] |
     | `max_fuel` | 1000 | 1..=1000000 |
+    | `max_episode_steps` | 10000 | 1..=4294967295: an argument of `gymnasium.make` (the `TimeLimit` it adds, see Episode End), not of this class, which refuses it |
     | `render_mode` | `None` | `None`, `"rgb_array"` (600 × 800 × 3 frames), `"human"` (a pygame window, 30 fps; declared only where pygame is installed) |
 
     An unknown option or a value out of range raises `ValueError` naming the option and its range.

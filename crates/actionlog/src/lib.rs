@@ -82,23 +82,14 @@ pub struct Played<'a> {
     pub actions: &'a [u8],
 }
 
-/// Every rules option of `config` as `Config::set` name → value text (what an action log stores).
+/// Every rules option of `config` (those [`chopperscape::OPTIONS`] marks `rule`) as `Config::set` name → value
+/// text (what an action log stores).
 pub fn rule_values(config: &Config) -> BTreeMap<String, String> {
-    let steps = config.max_episode_steps.map_or_else(|| "none".to_string(), |n| n.to_string());
-    [
-        ("lives", config.lives.to_string()),
-        ("bird_fuel_collision", config.bird_fuel_collision.as_str().to_string()),
-        ("alien_prob", config.alien_prob.to_string()),
-        ("frame_skip", config.frame_skip.to_string()),
-        ("sticky_prob", config.sticky_prob.to_string()),
-        ("bird_prob", config.bird_prob.to_string()),
-        ("fuel_prob", config.fuel_prob.to_string()),
-        ("max_fuel", config.max_fuel.to_string()),
-        ("max_episode_steps", steps),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect()
+    chopperscape::OPTIONS
+        .iter()
+        .filter(|o| o.rule)
+        .filter_map(|o| Some((o.name.to_string(), config.get(o.name)?)))
+        .collect()
 }
 
 /// Writes `episode`, played under `config` by `policy`, as an action log (JSON text).

@@ -5,7 +5,7 @@
 //! error (exit code 2) and the core's message naming the option and its allowed range.
 
 use anyhow::{Context, Result};
-use chopperscape::Config;
+use chopperscape::{Config, option_info};
 use clap::Args;
 
 /// A clap value parser that accepts exactly what `Config::set(name, value)` accepts.
@@ -16,40 +16,78 @@ fn option(name: &'static str) -> impl Fn(&str) -> Result<String, String> + Clone
     }
 }
 
-/// The options of SPEC.md ("Options beyond the tutorial"); each defaults to the v0 rules.
+/// The help of the flag of option `name`, from the core's description of it ([`chopperscape::OPTIONS`]): what it
+/// does, what it allows, and its default, written nowhere else.
+fn help(name: &str) -> String {
+    let o = option_info(name).unwrap_or_else(|| panic!("`{name}` is not an option of chopperscape::OPTIONS"));
+    format!("{}: {} [default: {}]", o.doc, o.allowed, o.default)
+}
+
+/// The options of SPEC.md ("Options beyond the tutorial"); each defaults to the v0 rules. Each flag's help is
+/// [`help`] of its option.
 #[derive(Args, Debug, Clone, Default)]
 #[command(next_help_heading = "Game options (SPEC.md; the defaults are the v0 rules)")]
 pub struct GameOptions {
-    /// Lives per episode, 1..=1000 [default: 1]
-    #[arg(long, value_name = "L", allow_negative_numbers = true, value_parser = option("lives"))]
+    #[arg(long, help = help("lives"), value_name = "L", allow_negative_numbers = true, value_parser = option("lives"))]
     pub lives: Option<String>,
-    /// Probability per step that an alien bird appears, in [0, 1] [default: 0]
-    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("alien_prob"))]
+    #[arg(
+        long,
+        help = help("alien_prob"),
+        value_name = "P",
+        allow_negative_numbers = true,
+        value_parser = option("alien_prob")
+    )]
     pub aliens: Option<String>,
-    /// What a bird and a fuel tank that collide do: pass or destroy [default: pass]
-    #[arg(long, value_name = "pass|destroy", value_parser = option("bird_fuel_collision"))]
+    #[arg(
+        long,
+        help = help("bird_fuel_collision"),
+        value_name = "pass|destroy",
+        value_parser = option("bird_fuel_collision")
+    )]
     pub bird_fuel_collision: Option<String>,
-    /// Steps each action is repeated for, 1..=1000 [default: 1]
-    #[arg(long, value_name = "K", allow_negative_numbers = true, value_parser = option("frame_skip"))]
+    #[arg(
+        long,
+        help = help("frame_skip"),
+        value_name = "K",
+        allow_negative_numbers = true,
+        value_parser = option("frame_skip")
+    )]
     pub frame_skip: Option<String>,
-    /// Probability that the previous action is applied instead of the new one, in [0, 1] [default: 0]
-    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("sticky_prob"))]
+    #[arg(
+        long,
+        help = help("sticky_prob"),
+        value_name = "P",
+        allow_negative_numbers = true,
+        value_parser = option("sticky_prob")
+    )]
     pub sticky: Option<String>,
-    /// Probability per step that a bird appears, in [0, 1] [default: 0.01]
-    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("bird_prob"))]
+    #[arg(
+        long,
+        help = help("bird_prob"),
+        value_name = "P",
+        allow_negative_numbers = true,
+        value_parser = option("bird_prob")
+    )]
     pub bird_prob: Option<String>,
-    /// Probability per step that a fuel tank appears, in [0, 1] [default: 0.01]
-    #[arg(long, value_name = "P", allow_negative_numbers = true, value_parser = option("fuel_prob"))]
+    #[arg(
+        long,
+        help = help("fuel_prob"),
+        value_name = "P",
+        allow_negative_numbers = true,
+        value_parser = option("fuel_prob")
+    )]
     pub fuel_prob: Option<String>,
-    /// Fuel at reset and after a refill, 1..=1000000 [default: 1000]
-    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = option("max_fuel"))]
+    #[arg(long, help = help("max_fuel"), value_name = "N", allow_negative_numbers = true, value_parser = option("max_fuel"))]
     pub max_fuel: Option<String>,
-    /// Agent steps after which an episode is truncated, or `none` [default: 10000]
-    #[arg(long, value_name = "N|none", allow_negative_numbers = true, value_parser = option("max_episode_steps"))]
+    #[arg(
+        long,
+        help = help("max_episode_steps"),
+        value_name = "N|none",
+        allow_negative_numbers = true,
+        value_parser = option("max_episode_steps")
+    )]
     pub max_episode_steps: Option<String>,
-    /// How drawn frames show fuel and lives: auto (the text line at full size, gauge bars in frames under
-    /// 300x400), text, or gauge [default: auto]
-    #[arg(long, value_name = "auto|text|gauge", value_parser = option("hud_style"))]
+    #[arg(long, help = help("hud_style"), value_name = "auto|text|gauge", value_parser = option("hud_style"))]
     pub hud_style: Option<String>,
 }
 
@@ -96,5 +134,45 @@ mod tests {
         let c = options.apply(Config::default()).unwrap();
         assert_eq!((c.hud_style, c.lives), (chopperscape::HudStyle::Gauge, 2));
         assert!(!chopperscape_actionlog::rule_values(&c).contains_key("hud_style"));
+    }
+
+    #[test]
+    fn the_rules_flags_are_the_rules_options() {
+        let v = Some("1".to_string());
+        let all = GameOptions {
+            lives: v.clone(),
+            aliens: v.clone(),
+            bird_fuel_collision: v.clone(),
+            frame_skip: v.clone(),
+            sticky: v.clone(),
+            bird_prob: v.clone(),
+            fuel_prob: v.clone(),
+            max_fuel: v.clone(),
+            max_episode_steps: v.clone(),
+            hud_style: v,
+        };
+        let given: std::collections::BTreeSet<&str> = all.given().into_iter().map(|(name, _)| name).collect();
+        let rules: std::collections::BTreeSet<&str> =
+            chopperscape::OPTIONS.iter().filter(|o| o.rule).map(|o| o.name).collect();
+        assert_eq!(given, rules);
+    }
+
+    #[test]
+    fn every_flag_help_is_the_core_description() {
+        use clap::Args as _;
+        let cmd = GameOptions::augment_args(clap::Command::new("t"));
+        let mut seen = 0;
+        for arg in cmd.get_arguments() {
+            let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+            let name = match arg.get_id().as_str() {
+                "aliens" => "alien_prob",
+                "sticky" => "sticky_prob",
+                id => id,
+            };
+            let o = option_info(name).unwrap_or_else(|| panic!("flag {name} is not a core option"));
+            assert_eq!(help, format!("{}: {} [default: {}]", o.doc, o.allowed, o.default));
+            seen += 1;
+        }
+        assert_eq!(seen, 10);
     }
 }

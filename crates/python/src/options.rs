@@ -5,7 +5,7 @@ use chopperscape::Config;
 use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyString};
+use pyo3::types::{PyBool, PyDict, PyList, PyString};
 
 use crate::errors::config_error;
 
@@ -89,6 +89,7 @@ pub(crate) fn option_value<'py>(py: Python<'py>, name: &str, text: &str) -> PyRe
         "obs_size" => c.obs_size.into_bound_py_any(py),
         "frame_stack" => c.frame_stack.into_bound_py_any(py),
         "hud" => c.hud.into_bound_py_any(py),
+        "hud_style" => c.hud_style.as_str().into_bound_py_any(py),
         "lives" => c.lives.into_bound_py_any(py),
         "bird_fuel_collision" => c.bird_fuel_collision.as_str().into_bound_py_any(py),
         "alien_prob" => c.alien_prob.into_bound_py_any(py),
@@ -100,4 +101,20 @@ pub(crate) fn option_value<'py>(py: Python<'py>, name: &str, text: &str) -> PyRe
         "max_episode_steps" => c.max_episode_steps.into_bound_py_any(py),
         _ => Err(PyValueError::new_err(format!("option `{name}` has no Python value type here"))),
     }
+}
+
+/// `_core.OPTIONS`: the core's description of every option ([`chopperscape::OPTIONS`]), in SPEC order, each a
+/// dict with `name`, `default` (text, as [`option_value`] reads it), `allowed`, `doc` and `rule`.
+pub(crate) fn option_table(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let table = PyList::empty(py);
+    for o in chopperscape::OPTIONS {
+        let row = PyDict::new(py);
+        row.set_item("name", o.name)?;
+        row.set_item("default", o.default)?;
+        row.set_item("allowed", o.allowed)?;
+        row.set_item("doc", o.doc)?;
+        row.set_item("rule", o.rule)?;
+        table.append(row)?;
+    }
+    Ok(table)
 }

@@ -188,7 +188,7 @@ impl VectorEnv {
     /// `Some(0)` (as [`chopperscape::Error::Config`]).
     pub fn set_time_limit(&mut self, limit: Option<u32>) -> Result<(), chopperscape::Error> {
         if limit == Some(0) {
-            let allowed = "an integer in 1..=4294967295, or none to never truncate";
+            let allowed = chopperscape::option_info("max_episode_steps").map_or("", |o| o.allowed);
             return Err(ConfigError::OutOfRange { option: "max_episode_steps", value: "0".into(), allowed }.into());
         }
         self.time_limit = limit;
