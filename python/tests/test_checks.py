@@ -69,6 +69,8 @@ def test_seeds():
     assert c.core_seed(np.uint64(2**64 - 1)) == 2**64 - 1 and type(c.core_seed(np.int32(3))) is int
     with pytest.raises(ValueError, match=r"^invalid reset seed -1: allowed a non-negative integer"):
         c.core_seed(-1, "reset seed")
+    with pytest.raises(ValueError, match=r"^invalid seed -1: allowed a non-negative integer"):
+        c.core_seed(-1)
     assert c.policy_seed(0) == 0 and c.policy_seed(2**64 - 1) == 2**64 - 1
     for bad in (-1, 2**64):
         with pytest.raises(ValueError, match=rf"^invalid seed {bad}: allowed an integer in \[0, 2\*\*64\)$"):
@@ -86,7 +88,9 @@ def test_time_limit():
 def test_reset_options():
     c.check_reset_options(None)
     c.check_reset_options({})
-    with pytest.raises(ValueError, match=r"reset options \['a', 'b'\] are not supported"):
+    with pytest.raises(
+        ValueError, match=r"^reset options \['a', 'b'\] are not supported: ChopperScape's reset takes no"
+    ):
         c.check_reset_options({"b": 1, "a": 2})
     with pytest.raises(ValueError, match=r"reset options \['reset_mask'\] are not supported"):
         c.check_reset_options(["reset_mask"])

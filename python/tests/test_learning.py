@@ -186,8 +186,12 @@ def test_iqm_and_bootstrap_match_their_definitions():
 
     assert parse_seeds("0-3,7, 2") == [0, 1, 2, 3, 7] and parse_seeds("1,0,2-3") == [1, 0, 2, 3]
     for bad in ("", "a", "3-1", "-1", "0-5000"):
-        with pytest.raises(ValueError, match="--seeds"):
+        with pytest.raises(ValueError, match=r"^--seeds"):
             parse_seeds(bad)
+    # At most 1000 seeds a range, wherever it starts (boundaries from the mutation pass).
+    assert len(parse_seeds("0-999")) == 1000 and parse_seeds("600-700")[-1] == 700
+    with pytest.raises(ValueError, match=r"^--seeds '0-1000': '0-1000' must be 0 <= FIRST <= LAST with at most 1000"):
+        parse_seeds("0-1000")
     x = np.array([100.0, 1, 2, 3, 4, 5, 6, 7, 8, -50])
     # scipy.stats.trim_mean(x, 0.25): drop int(0.25 * 10) = 2 from each end.
     assert iqm(x) == pytest.approx(np.mean([2, 3, 4, 5, 6, 7]))
@@ -196,6 +200,11 @@ def test_iqm_and_bootstrap_match_their_definitions():
     assert lo < iqm(x) < hi and lo >= -50 and hi <= 100
     assert bootstrap_ci(x, resamples=4000) == (lo, hi)  # seeded: a summary is reproducible
     assert bootstrap_ci(np.full(6, 7.0), resamples=100) == (7.0, 7.0)
+    # The protocol the docs state: 100 held-out seeds from 1,000,000; rliable's 50,000 resamples, 95 %, seed 0.
+    from chopperscape.learn import seeds
+
+    assert (seeds.EVAL_EPISODES, seeds.EVAL_SEED, seeds.RESAMPLES) == (100, 1_000_000, 50_000)
+    assert bootstrap_ci(x) == bootstrap_ci(x, resamples=50_000, level=0.95, seed=0)
     # Curves: points along the first axis are bootstrapped together, one interval per point.
     lo2, hi2 = bootstrap_ci(np.stack([x, x + 10]), resamples=4000)
     assert np.allclose(lo2, [lo, lo + 10]) and np.allclose(hi2, [hi, hi + 10])

@@ -70,3 +70,44 @@ def test_read_skips_rows_without_returns_and_names_bad_files(tmp_path):
     (tmp_path / "text.csv").write_text("env_steps,wall_s,episodes,mean_return,std_return,mean_length\nx,1,1,1,1,1\n")
     with pytest.raises(ValueError, match=r"text\.csv: not a progress CSV"):
         progress.read(tmp_path / "text.csv")
+
+
+def test_the_schema_is_the_documented_contract():
+    # The column names and their order are a file format others read (README, docs/learning.md): pinned here.
+    assert progress.RETURNS == ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length")
+    assert progress.DIAGNOSTICS == (
+        "learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss",
+    )  # fmt: skip
+    assert progress.ENDINGS == ("ended", "bird", "fuel", "limit")
+    assert progress.COLUMNS == progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS
+
+
+def test_every_refusal_names_the_file_first(tmp_path):
+    # Each message starts with what was wrong, so that a one-line error says which file (from the mutation pass).
+    with pytest.raises(ValueError, match=r"^progress columns must start with \['env_steps'"):
+        progress.Writer(tmp_path / "a.csv", ["wall_s"])
+    w = progress.Writer(tmp_path / "w.csv")
+    with pytest.raises(KeyError, match=r"^\"not progress columns: \['bogus'\]\"$"):
+        w.row({"bogus": 1})
+    w.close()
+    (tmp_path / "empty.csv").write_text("")
+    with pytest.raises(ValueError, match=rf"^{tmp_path / 'empty.csv'}: no rows$"):
+        progress.read(tmp_path / "empty.csv")
+    (tmp_path / "short.csv").write_text("env_steps,wall_s\n1,2\n")
+    with pytest.raises(
+        ValueError,
+        match=rf"^{tmp_path / 'short.csv'}: missing columns .*expected {','.join(progress.RETURNS)}, \.\.\.\)$",
+    ):
+        progress.read(tmp_path / "short.csv")
+    (tmp_path / "none.csv").write_text(",".join(progress.RETURNS) + "\n1,0.1,0,,,\n")
+    with pytest.raises(ValueError, match=rf"^{tmp_path / 'none.csv'}: no finished episode yet$"):
+        progress.read(tmp_path / "none.csv")
+    (tmp_path / "text.csv").write_text(",".join(progress.RETURNS) + "\nx,1,1,1,1,1\n")
+    with pytest.raises(ValueError, match=rf"^{tmp_path / 'text.csv'}: not a progress CSV \("):
+        progress.read(tmp_path / "text.csv")
+
+
+def test_a_writer_makes_missing_folders(tmp_path):
+    with progress.Writer(tmp_path / "a" / "b" / "c" / "progress.csv") as w:
+        w.row({"env_steps": 1})
+    assert (tmp_path / "a" / "b" / "c" / "progress.csv").is_file()
