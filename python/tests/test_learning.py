@@ -7,6 +7,8 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+import subprocess
+import sys
 
 import gymnasium as gym
 import numpy as np
@@ -200,11 +202,32 @@ def test_iqm_and_bootstrap_match_their_definitions():
     assert lo < iqm(x) < hi and lo >= -50 and hi <= 100
     assert bootstrap_ci(x, resamples=4000) == (lo, hi)  # seeded: a summary is reproducible
     assert bootstrap_ci(np.full(6, 7.0), resamples=100) == (7.0, 7.0)
+    with pytest.raises(ValueError, match=r"^--seeds '0-999,1000': at most 1000 seeds$"):
+        parse_seeds("0-999,1000")
+    # The percentile bootstrap by its definition: resample the runs with replacement (numpy's generator, seeded),
+    # take the statistic of each resample, and the 2.5th and 97.5th percentiles of those.
+    rng = np.random.default_rng(3)
+    idx = rng.integers(0, len(x), size=(1000, len(x)))
+    ref = np.percentile([iqm(x[i]) for i in idx], [2.5, 97.5])
+    assert bootstrap_ci(x, resamples=1000, seed=3) == tuple(ref)
+    assert bootstrap_ci(x, resamples=1000, level=0.5, seed=3) == tuple(
+        np.percentile([iqm(x[i]) for i in idx], [25.0, 75.0])
+    )
+    # With a statistic that is not stepped (the mean), every percentile and the default seed 0 show.
+    idx0 = np.random.default_rng(0).integers(0, len(x), size=(1000, len(x)))
+    means = x[idx0].mean(axis=-1)
+    assert np.allclose(bootstrap_ci(x, stat=np.mean, resamples=1000), np.percentile(means, [2.5, 97.5]), atol=1e-9)
+    assert np.allclose(
+        bootstrap_ci(x, stat=np.mean, resamples=1000, level=0.8), np.percentile(means, [10, 90]), atol=1e-9
+    )
     # The protocol the docs state: 100 held-out seeds from 1,000,000; rliable's 50,000 resamples, 95 %, seed 0.
     from chopperscape.learn import seeds
 
     assert (seeds.EVAL_EPISODES, seeds.EVAL_SEED, seeds.RESAMPLES) == (100, 1_000_000, 50_000)
     assert bootstrap_ci(x) == bootstrap_ci(x, resamples=50_000, level=0.95, seed=0)
+    # `python -m chopperscape.learn.seeds` is a command (its --help needs no training).
+    out = subprocess.run([sys.executable, "-m", "chopperscape.learn.seeds", "--help"], capture_output=True, text=True)
+    assert out.returncode == 0 and "--seeds SEEDS" in out.stdout, out.stderr
     # Curves: points along the first axis are bootstrapped together, one interval per point.
     lo2, hi2 = bootstrap_ci(np.stack([x, x + 10]), resamples=4000)
     assert np.allclose(lo2, [lo, lo + 10]) and np.allclose(hi2, [hi, hi + 10])
