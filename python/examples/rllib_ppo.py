@@ -34,6 +34,16 @@ _FINISHED = "_chopperscape_finished"
 _SAMPLED = "_chopperscape_sampled"
 
 
+class _NoWriter:
+    """Stands for the progress writer when nothing is trained (`--eval-only`)."""
+
+    def __enter__(self) -> _NoWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
@@ -42,8 +52,23 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--envs-per-runner", type=int, default=16, help="games each runner steps as one batch")
     p.add_argument("--cpus-per-runner", type=float, default=1, help="CPUs Ray reserves for each runner")
     p.add_argument("--address", default=None, help="Ray cluster to join ('auto', or host:port); default: a local Ray")
-    p.add_argument("--minutes", type=float, default=30.0, help="training time (stops after the iteration past it)")
+    p.add_argument(
+        "--minutes",
+        type=float,
+        default=None,
+        help="training time (stops after the iteration past it; default 30 unless --steps or --iterations is given)",
+    )
     p.add_argument("--iterations", type=int, default=None, help="stop after this many iterations (also)")
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        help="stop after the iteration that reaches this many env steps; the learning rate then falls linearly "
+        "to 0 at this count, as the recipe's (--no-anneal-lr keeps it constant)",
+    )
+    p.add_argument(
+        "--no-anneal-lr", dest="anneal_lr", action="store_false", help="constant learning rate even with --steps"
+    )
     p.add_argument(
         "--csv",
         default="runs/rllib-ppo/progress.csv",
@@ -83,6 +108,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--checkpoint", default=None, help="save the algorithm to this directory at the end")
     p.add_argument("--restore", default=None, help="start from a checkpoint saved by --checkpoint")
     p.add_argument("--summary", default=None, help="write a JSON summary to this file at the end")
+    p.add_argument(
+        "--eval-episodes",
+        type=int,
+        default=0,
+        help="after training, play this many episodes greedily on seeds --eval-seed, +1, ... (default 0: none), "
+        "as `python -m chopperscape.learn.evaluate` does, and write its JSON to --eval-out",
+    )
+    p.add_argument("--eval-seed", type=int, default=1_000_000, help="first evaluation seed (default 1000000)")
+    p.add_argument("--eval-out", default=None, help="evaluation JSON (default: printed)")
+    p.add_argument(
+        "--eval-only",
+        action="store_true",
+        help="no training: evaluate the checkpoint given by --restore (which is a pickle: only your own or trusted)",
+    )
     args = p.parse_args(argv)
     if args.env_runners < 0:
         p.error(f"--env-runners must be >= 0, got {args.env_runners}")
@@ -90,10 +129,20 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
     if args.cpus_per_runner <= 0:
         p.error(f"--cpus-per-runner must be > 0, got {args.cpus_per_runner}")
-    if not args.minutes > 0:
+    if args.minutes is None and args.steps is None and args.iterations is None:
+        args.minutes = 30.0
+    if args.minutes is not None and not args.minutes > 0:
         p.error(f"--minutes must be > 0, got {args.minutes}")
+    if args.steps is not None and args.steps < 1:
+        p.error(f"--steps must be >= 1, got {args.steps}")
     if args.torch_threads < 1:
         p.error(f"--torch-threads must be >= 1, got {args.torch_threads}")
+    if args.eval_episodes < 0:
+        p.error(f"--eval-episodes must be >= 0, got {args.eval_episodes}")
+    if not 0 <= args.eval_seed < 2**63:
+        p.error(f"--eval-seed must be in 0..2**63, got {args.eval_seed}")
+    if args.eval_only and (args.restore is None or args.eval_episodes < 1):
+        p.error("--eval-only needs --restore DIR and --eval-episodes N >= 1")
     if args.iterations is not None and args.iterations < 1:
         p.error(f"--iterations must be >= 1, got {args.iterations}")
     try:
@@ -178,7 +227,8 @@ def build_config(args: argparse.Namespace):
             train_batch_size_per_learner=args.train_batch_size,
             minibatch_size=args.minibatch_size,
             num_epochs=args.epochs,
-            lr=args.lr,
+            # As the recipe: linear decay to 0 at --steps (RLlib interpolates [[step, lr], ...] by env steps).
+            lr=[[0, args.lr], [args.steps, 0.0]] if args.steps and args.anneal_lr else args.lr,
             gamma=args.gamma,
             lambda_=args.lambda_,
             entropy_coeff=args.entropy,
@@ -191,6 +241,56 @@ def build_config(args: argparse.Namespace):
         .callbacks(on_episode_end=record_episode, on_sample_end=count_steps)
         .debugging(seed=args.seed)
     )
+
+
+def observation_filter_state(env_runner: Any) -> dict:
+    """The MeanStdFilter connector's state on a runner (runs in the runner); {} without one."""
+    for connector in env_runner._env_to_module.connectors:
+        if type(connector).__name__ == "MeanStdFilter":
+            return connector.get_state()
+    return {}
+
+
+def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """Greedy episodes of the trained module on seeds `--eval-seed`, +1, ..., played and summarised by
+    `chopperscape.learn.evaluate` (the same JSON as `python -m chopperscape.learn.evaluate`), with the
+    observations normalised by the runners' filter statistics, frozen."""
+    import numpy as np
+    import torch
+    from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
+
+    import chopperscape
+    from chopperscape.learn import evaluate as chopper_eval
+
+    module = algo.get_module()
+    states = [s for s in algo.env_runner_group.foreach_env_runner(observation_filter_state) if s]
+    normalise = None
+    space_ndim = len(chopperscape.VectorEnv(1, **args.env_config).single_observation_space.shape)
+    if args.env_config.get("obs_type") == "features":
+        if not states:
+            raise SystemExit("error: no runner has the observation filter's statistics to evaluate with")
+        space = chopperscape.VectorEnv(1, **args.env_config).single_observation_space
+        obs_filter = MeanStdFilter()  # (given the space in its constructor, it reads its clip before setting it)
+        obs_filter.input_observation_space = space
+        obs_filter.set_state(states[0])
+        normalise = obs_filter._filters[None]
+
+    def act(obs: np.ndarray, _envs: Any) -> np.ndarray:
+        if normalise is not None:
+            x = normalise(obs, update=False)
+        else:  # FloatPixels, batched: [0, 1] floats, a channel axis for plain grayscale
+            x = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs
+            x = x[..., None] if x.ndim == 3 and space_ndim == 2 else x
+        with torch.no_grad():
+            out = module.forward_inference({"obs": torch.as_tensor(np.asarray(x, dtype=np.float32))})
+        return out["action_dist_inputs"].argmax(-1).cpu().numpy()
+
+    options = {k: v for k, v in args.env_config.items() if k != "max_episode_steps"}
+    limit = args.env_config.get("max_episode_steps", 10_000)
+    results = chopper_eval.play_episodes(act, args.eval_episodes, args.eval_seed, options, max_episode_steps=limit)
+    out: dict[str, Any] = {"model": args.checkpoint or args.restore or "rllib", "seed": args.eval_seed, "greedy": True}
+    out.update(chopper_eval.summary(results))
+    return out
 
 
 def weights_digest(algo: Any) -> str:
@@ -257,8 +357,8 @@ def main(argv: list[str] | None = None) -> int:
     env_steps = 0
     iterations = 0
     start = time.monotonic()
-    with progress.Writer(args.csv, progress.RETURNS) as out:
-        while True:
+    with progress.Writer(args.csv, progress.RETURNS) if not args.eval_only else _NoWriter() as out:
+        while not args.eval_only:
             result = algo.train()
             iterations += 1
             wall = time.monotonic() - start
@@ -290,7 +390,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"return {mean:9.1f} ± {std:7.1f}  length {length:8.1f}  {wall:7.1f}s",
                 flush=True,
             )
-            if wall >= args.minutes * 60 or (args.iterations is not None and iterations >= args.iterations):
+            if (
+                (args.minutes is not None and wall >= args.minutes * 60)
+                or (args.iterations is not None and iterations >= args.iterations)
+                or (args.steps is not None and env_steps >= args.steps)
+            ):
                 break
     reports = [r for r in group.foreach_env_runner(runner_report, local_env_runner=True) if r[2]]
     summary.update(
@@ -306,6 +410,14 @@ def main(argv: list[str] | None = None) -> int:
         driver_pid=os.getpid(),
         weights_sha256=weights_digest(algo),
     )
+    if args.eval_episodes:
+        report = evaluate(algo, args)
+        summary["evaluation"] = {k: report[k] for k in ("episodes", "mean_return", "std_return", "causes")}
+        text = json.dumps(report)
+        if args.eval_out:
+            with open(args.eval_out, "w") as f:
+                f.write(text + "\n")
+        print(text, flush=True)
     if args.checkpoint:
         summary["checkpoint"] = algo.save_to_path(os.path.abspath(args.checkpoint))
     if args.summary:

@@ -90,6 +90,27 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
 
 
 @pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--steps", "0"], "--steps must be >= 1, got 0"),
+        (["--eval-episodes", "-1"], "--eval-episodes must be >= 0, got -1"),
+        (["--eval-only", "--eval-episodes", "3"], "--eval-only needs --restore DIR and --eval-episodes N >= 1"),
+        (["--eval-seed", "-5"], "--eval-seed must be in 0..2**63, got -5"),
+    ],
+)
+def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
+    run = subprocess.run(
+        [sys.executable, str(EXAMPLE), *flags],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
+    )
+    assert run.returncode == 2 and message in run.stderr, run.stderr
+
+
+@pytest.mark.parametrize(
     "config, message",
     [
         ({"num_envs": 2, "obs_type": "nope"}, "obs_type"),
@@ -310,7 +331,22 @@ def _train(cluster, out: Path, name: str, *extra: str) -> tuple[dict, list[dict]
 
 
 def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cluster, tmp_path):
-    summary, rows = _train(ray_cluster, tmp_path, "first", "--iterations", "2", "--checkpoint", str(tmp_path / "ck"))
+    first_eval = tmp_path / "first.eval.json"
+    summary, rows = _train(
+        ray_cluster,
+        tmp_path,
+        "first",
+        "--iterations",
+        "2",
+        "--checkpoint",
+        str(tmp_path / "ck"),
+        "--eval-episodes",
+        "3",
+        "--eval-seed",
+        "77",
+        "--eval-out",
+        str(first_eval),
+    )
     assert len(rows) == 2 == summary["iterations"]
     steps = [int(r["env_steps"]) for r in rows]
     assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
@@ -335,3 +371,42 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     assert restored["weights_sha256"] != summary["weights_sha256"]  # and training goes on from there
     seeds = [s for w in ("1", "2") for s in restored["seeds_per_runner"][w]]
     assert len(set(seeds)) == 8 and restored["seeds_per_runner"]["1"][0] == (3 + 1) * K + 1
+
+    # --eval-only: the checkpoint, restored, plays the held-out episodes exactly as the run that wrote it did
+    # (the same weights and the same frozen observation statistics).
+    evaluated = json.loads(first_eval.read_text())
+    assert evaluated["episodes"] == 3 and evaluated["seed"] == 77 and evaluated["greedy"] is True
+    assert summary["evaluation"]["mean_return"] == evaluated["mean_return"]
+    again = tmp_path / "again.eval.json"
+    run = subprocess.run(
+        [
+            sys.executable,
+            str(EXAMPLE),
+            "--address",
+            ray_cluster["address"],
+            "--env-runners",
+            "1",
+            "--envs-per-runner",
+            "4",
+            "--hidden",
+            "16",
+            "--env-config",
+            '{"max_fuel": 40}',
+            "--restore",
+            str(tmp_path / "ck"),
+            "--eval-only",
+            "--eval-episodes",
+            "3",
+            "--eval-seed",
+            "77",
+            "--eval-out",
+            str(again),
+        ],
+        check=False,
+        env=ray_cluster["env"],
+        capture_output=True,
+        text=True,
+        timeout=420,
+    )
+    assert run.returncode == 0, run.stderr[-4000:]
+    assert json.loads(again.read_text()) == evaluated

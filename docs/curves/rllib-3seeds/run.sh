@@ -1,0 +1,13 @@
+#!/bin/bash
+# RLlib PPO with the recipe's settings (γ 0.9995, entropy 0.02, batches of 16,384 steps in minibatches of 2,048,
+# 4 epochs, lr 3e-4 falling linearly to 0, returns scaled), 5 M env steps, then 100 greedy episodes on the
+# held-out seeds 1000000.. . From the repository root: bash docs/curves/rllib-3seeds/run.sh K   (K: training seed)
+s=$1
+OUT=${OUT:-runs/rllib-3seeds}
+mkdir -p "$OUT"
+PY=${PY:-.venv-rllib/bin/python}
+[ -s "$OUT/seed-$s.eval.json" ] || OMP_NUM_THREADS=1 $PY python/examples/rllib_ppo.py --steps 5000000 --seed "$s" \
+  --env-runners 1 --envs-per-runner 64 --train-batch-size 16384 --minibatch-size 2048 --epochs 4 \
+  --gamma 0.9995 --entropy 0.02 --csv "$OUT/seed-$s.csv" --checkpoint "$OUT/ckpt-seed-$s" \
+  --summary "$OUT/seed-$s.summary.json" --eval-episodes 100 --eval-seed 1000000 --eval-out "$OUT/seed-$s.eval.json" \
+  > "$OUT/seed-$s.log" 2>&1
