@@ -192,7 +192,9 @@ elif ! quiet "$DPY" "${PIP[@]}" --force-reinstall --no-deps "$wheel" "$cli_wheel
   || ! quiet "$DPY" "${PIP[@]}" "$wheel"; then
   say "skipped: the documentation site (the wheel's dependencies could not be installed from PyPI)"
 else
-  quiet nice -n 10 cargo doc --no-deps -q -p chopperscape-core -p chopperscape-vector -p chopperscape-actionlog
+  # rustdoc as strict as sphinx -W: a broken or private intra-doc link fails here.
+  RUSTDOCFLAGS="-D warnings" quiet nice -n 10 cargo doc --no-deps -q -p chopperscape-core -p chopperscape-vector \
+    -p chopperscape-actionlog
   rm -rf docs/site/_build/html
   quiet "$DPY" -m sphinx -W --keep-going -q -b html docs/site docs/site/_build/html
   [ -f docs/site/_build/html/rustdoc/chopperscape/index.html ] \

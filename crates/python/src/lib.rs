@@ -1,9 +1,9 @@
 //! The Python binding: the module `chopperscape._core`, thin newtypes over the core and vector crates.
 //!
-//! - [`env::PyEnv`] (`_core.Env`) wraps one [`chopperscape::ChopperScape`]; [`vector::PyVectorEnv`]
+//! - `env::PyEnv` (`_core.Env`) wraps one [`chopperscape::ChopperScape`]; `vector::PyVectorEnv`
 //!   (`_core.VectorEnv`) wraps a [`chopperscape_vector::VectorEnv`].
-//! - Options arrive as a dict and go through [`chopperscape::Config::set`] ([`options`]); errors become Python
-//!   exceptions in one place ([`errors`]).
+//! - Options arrive as a dict and go through [`chopperscape::Config::set`] (`options`); errors become Python
+//!   exceptions in one place (`errors`).
 //! - Observations are written straight into numpy arrays the binding allocates; pixel work and every batch
 //!   run with the GIL released. A Rust panic surfaces as `pyo3_runtime.PanicException`, never an abort.
 //!

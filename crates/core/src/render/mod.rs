@@ -3,14 +3,14 @@
 //!
 //! A frame is `height × width` pixels, row-major, white background. Entities are drawn in this order: fuel
 //! tanks, birds, aliens, missiles, the chopper last (on top); then the HUD ([`Hud`]) in the strip above the
-//! flight band: the tutorial's text line ([`hud`]) or the fuel and lives gauges ([`gauge`]). Sprites ([`art`])
+//! flight band: the tutorial's text line (`hud.rs`) or the fuel and lives gauges (`gauge.rs`). Sprites (`art.rs`)
 //! keep their transparency: only their opaque pixels are written.
 //!
 //! # Scaling
 //! A frame of another size than 800 × 600 is drawn natively at that size, never by shrinking a full frame:
 //! an entity at `(x, y)` lands at `(⌊x·W/800⌋, ⌊y·H/600⌋)` and every sprite of one kind has the same size,
 //! its SPEC size times the scale, rounded (at least one pixel). Sprites are resampled once, in
-//! [`Renderer::new`], by box filtering ([`sprite`]); the HUD is sampled through tables built there too.
+//! [`Renderer::new`], by box filtering (`sprite.rs`); the HUD is sampled through tables built there too.
 //! Every sprite lies at or below row `⌊60·H/600⌋`, so the rows above belong to the HUD alone.
 //!
 //! # The HUD and the pixel layout version
@@ -65,9 +65,9 @@ pub const TEXT_MIN_SIZE: (u32, u32) = (HEIGHT as u32 / 2, WIDTH as u32 / 2);
 pub enum Hud {
     /// Nothing: the strip stays background.
     Off,
-    /// The tutorial's text line ([`hud`]).
+    /// The tutorial's text line (`hud.rs`).
     Text,
-    /// The fuel and lives bars ([`gauge`]).
+    /// The fuel and lives bars (`gauge.rs`).
     Gauge,
 }
 
