@@ -521,3 +521,40 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     assert json.loads(capsys.readouterr().out) == out
     # One call per decision, on the batch of raw features (the policy never acts on an unnormalised observation).
     assert all(shape[1:] == (46,) for shape in seen) and len(seen) >= out["mean_steps"]
+
+
+@needs_torch
+@pytest.mark.parametrize("network, shape", [("small", (84, 84, 4)), ("small", (42, 42, 4)), ("nature", (84, 84))])
+def test_cnn_act_runs_the_trunk_once_and_matches_both_heads(network, shape):
+    """`CnnAgent.act` shares one trunk pass between the heads (half the convolutions of calling `actor` and
+    `critic`); its log-probabilities, entropy, value and gradients are those of the two heads called apart."""
+    import torch
+
+    from chopperscape.learn import model
+
+    torch.manual_seed(0)
+    agent = model.build_agent(network, shape)
+    x = torch.randint(0, 256, (6, *shape), dtype=torch.uint8)
+    actions = torch.tensor([0, 1, 2, 3, 4, 0])
+    trunk = agent.actor[0]
+    calls = []
+    hook = trunk.register_forward_hook(lambda *_: calls.append(1))
+    _, logp, ent, value = agent.act(x, actions)
+    hook.remove()
+    assert len(calls) == 1
+    dist = torch.distributions.Categorical(logits=agent.actor(x))
+    torch.testing.assert_close(logp, dist.log_prob(actions), rtol=0, atol=1e-6)
+    torch.testing.assert_close(ent, dist.entropy(), rtol=0, atol=1e-6)
+    torch.testing.assert_close(value, agent.value(x), rtol=0, atol=1e-6)
+    # The same gradients as the loss built from the separate heads.
+    (logp.sum() + value.sum()).backward()
+    shared = [p.grad.clone() for p in agent.parameters()]
+    agent.zero_grad()
+    (dist.log_prob(actions).sum() + agent.value(x).sum()).backward()
+    for got, want in zip(shared, (p.grad for p in agent.parameters())):
+        torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-6)
+    # Frames: uint8 and float frames in 0..255 give the same numbers, and a float input is not changed in place.
+    xf = x.float()
+    before = xf.clone()
+    torch.testing.assert_close(agent.act(xf, actions)[1], logp.detach(), rtol=0, atol=1e-6)
+    assert torch.equal(xf, before)

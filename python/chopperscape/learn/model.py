@@ -12,7 +12,7 @@ import math
 import os
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any, NamedTuple, TypeVar
+from typing import Any, NamedTuple, TypeVar, cast
 
 import numpy as np
 from gymnasium.wrappers.utils import RunningMeanStd as _GymRunningMeanStd
@@ -123,8 +123,10 @@ class Frames(nn.Module):
     saved or exported policy takes the env's observation unchanged."""
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        x = x.float() * (1.0 / 255.0)
-        return x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
+        # Permuted first, cast after: the floats come out channels-last in memory, which the CPU convolutions
+        # read faster than a strided view of NHWC floats (and the same numbers).
+        x = x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
+        return x.float() * (1.0 / 255.0)
 
 
 #: CNN layouts: (channels, kernel, stride) per convolution, then the width of the dense layer. "small" on frames
@@ -163,8 +165,19 @@ class CnnAgent(ActorCritic):
                 )
         flat = channels * size[0] * size[1]
         trunk = nn.Sequential(*layers, _layer(nn.Linear(flat, width)), nn.ReLU())
+        # `actor.0` and `critic.0` are the one trunk; these names are the checkpoint format's.
         self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
         self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
+
+    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
+        """As :meth:`ActorCritic.act`, with the shared trunk run once for both heads (`actor(x)` and `critic(x)`
+        each run it: twice the convolutions, forward and backward, for the same numbers)."""
+        actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
+        h = actor[0](x)
+        dist = torch.distributions.Categorical(logits=actor[1](h))
+        if action is None:
+            action = dist.sample()
+        return action, dist.log_prob(action), dist.entropy(), critic[1](h).squeeze(-1)
 
 
 def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128) -> ActorCritic:
