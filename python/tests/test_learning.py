@@ -275,6 +275,41 @@ def test_seeds_runner_smoke_trains_evaluates_resumes_and_summarises(tmp_path, ca
     assert json.loads((out / "summary.json").read_text()) == summary
 
 
+def test_seeds_summarise_reads_another_trainers_evaluations_and_refuses_mismatches(tmp_path, capsys):
+    """`--summarise DIR`: the SB3 and RLlib rows get the recipe's statistics from their own files."""
+    from chopperscape.learn import seeds
+
+    folder = tmp_path / "rllib"
+    folder.mkdir()
+    means = {0: 3425.6, 1: 900.0, 2: 5100.0, 3: 4000.0}
+    for k, m in means.items():
+        result = {"seed": 1_000_000, "episodes": 3, "mean_return": m, "std_return": 10.0, "min_return": int(m) - 5}
+        result |= {"max_return": int(m) + 5, "mean_steps": m, "causes": {"bird": 1.0}}
+        (folder / f"seed-{k}.eval.json").write_text(json.dumps(result))
+        (folder / f"seed-{k}.csv").write_text("env_steps,wall_s,episodes,mean_return\n100,1,1,5\n200,2,2,9\n")
+    (folder / "seed-x.eval.json").write_text("{}")  # not a seed's: ignored
+    args = ["--summarise", str(folder), "--steps", "200", "--eval-episodes", "3", "--title", "RLlib PPO"]
+    assert seeds.main(args) == 0
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["seeds"] == [0, 1, 2, 3] and summary["steps"] == 200
+    assert summary["iqm"] == round(float(seeds.iqm(np.array(list(means.values())))), 1) == 3712.8
+    assert summary["min"] == 900.0 and set(summary["baselines"]) == {"random", "heuristic"}
+    assert (folder / "baseline-heuristic.json").is_file() and "| 3 | 4,000 ± 10 |" in (
+        folder / "summary.md"
+    ).read_text()
+    capsys.readouterr()
+    # Evaluations of other held-out seeds, a missing curve, an empty folder, training flags: refused, named.
+    assert seeds.main(["--summarise", str(folder), "--steps", "200"]) == 2
+    assert "played 3 episodes from seed 1000000; this summary is of 100 from 1000000" in capsys.readouterr().err
+    (folder / "seed-2.csv").unlink()
+    assert seeds.main(args) == 2 and "seed-2.csv missing" in capsys.readouterr().err
+    assert seeds.main(["--summarise", str(tmp_path / "none"), "--eval-episodes", "3"]) == 2
+    assert "has no seed-K.eval.json" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        seeds.main([*args, "--seeds", "0-1"])
+    assert "--summarise DIR takes no --seeds" in capsys.readouterr().err
+
+
 def test_evaluate_plays_builtin_policies_on_the_same_seeds_as_the_command_line(capsys):
     from chopperscape import policies
     from chopperscape.learn import evaluate

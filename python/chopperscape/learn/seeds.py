@@ -17,6 +17,14 @@ It then writes:
   the heuristic and the worst seed;
 - ``OUT/curves.png`` (with matplotlib): every seed's training curve, their IQM with a 95 % band, random and heuristic.
 
+Other trainers' runs (SB3, RLlib) are summarised the same way from their files: ``--summarise DIR`` reads
+``DIR/seed-K.eval.json`` (``python -m chopperscape.learn.evaluate`` output, or ``rllib_ppo.py --eval-out``) and
+``DIR/seed-K.csv`` (a progress CSV with ``env_steps`` and ``mean_return``) for every ``K`` there, evaluates the
+baselines on the same held-out seeds (kept in ``DIR/baseline-NAME.json``) and writes the same three files into
+``DIR``; ``--title`` names the trainer in the plot:
+
+    python -m chopperscape.learn.seeds --summarise docs/curves/rllib-3seeds --steps 5000000 --title "RLlib PPO"
+
 The statistics follow Agarwal et al. 2021 ("Deep RL at the edge of the statistical precipice", the ``rliable``
 library): the IQM is the mean of the middle 50 % of runs (``scipy.stats.trim_mean(x, 0.25)``), and its interval is
 the percentile bootstrap over runs. With one task, rliable's stratified bootstrap *is* this plain bootstrap over
@@ -245,7 +253,7 @@ def markdown(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | None:
+def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any], title: str = "PPO recipe") -> Path | None:
     """Per-seed training curves, their IQM with a 95 % bootstrap band, and the baselines; `None` without matplotlib."""
     try:
         import matplotlib
@@ -283,7 +291,7 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any]) -> Path | No
     ax.set_xlabel("env steps (millions)")
     ax.set_ylabel("mean return, last 100 training episodes")
     ax.set_title(
-        f"ChopperScape-v0 PPO recipe: {len(curves)} training seeds "
+        f"ChopperScape-v0 {title}: {len(curves)} training seeds "
         f"(held-out IQM {summary['iqm']:,.0f} [{summary['iqm_ci95'][0]:,.0f}–{summary['iqm_ci95'][1]:,.0f}])",
         fontsize="medium",
     )
@@ -304,14 +312,29 @@ def main(argv: list[str] | None = None) -> int:
         description=__doc__.splitlines()[0],
         epilog="Other flags are passed on to python -m chopperscape.learn.train.",
     )
-    p.add_argument("--seeds", required=True, help="training seeds, e.g. 0-9 or 0,3,5")
-    p.add_argument("--out", type=Path, required=True, help="folder: seed-K/ per seed, summary.json, summary.md")
+    p.add_argument("--seeds", help="training seeds, e.g. 0-9 or 0,3,5 (required unless --summarise)")
+    p.add_argument("--out", type=Path, help="folder: seed-K/ per seed, summary.json, summary.md")
+    p.add_argument(
+        "--summarise",
+        type=Path,
+        metavar="DIR",
+        help="train nothing: summarise DIR/seed-K.eval.json and DIR/seed-K.csv of another trainer (into DIR)",
+    )
+    p.add_argument("--title", default="PPO recipe", help="what trained the seeds, for the plot's title")
     p.add_argument("--steps", type=int, default=DEFAULT_STEPS, help=f"env steps per seed (default {DEFAULT_STEPS:,})")
     p.add_argument("--jobs", type=int, default=None, help="trainings at once (default: one per core)")
     p.add_argument("--eval-episodes", type=int, default=EVAL_EPISODES)
     p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
     a, forward = p.parse_known_args(argv)
+    if a.summarise is not None:
+        if a.seeds or a.out or forward:
+            p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
+        if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
+            p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
+        return summarise_folder(a)
+    if a.seeds is None or a.out is None:
+        p.error("--seeds and --out are required (or --summarise DIR)")
     if any(f == "--seed" or f.startswith("--seed=") for f in forward):
         p.error("--seed: give the training seeds with --seeds")
     if any(f == "--minutes" or f.startswith("--minutes=") for f in forward):
@@ -341,7 +364,55 @@ def main(argv: list[str] | None = None) -> int:
     summary = summarise(results, baselines, a.steps)
     (a.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     (a.out / "summary.md").write_text(markdown(summary))
-    plot(a.out, {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}, summary)
+    plot(a.out, {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}, summary, a.title)
+    print(markdown(summary))
+    return 0
+
+
+def summarise_folder(a: argparse.Namespace) -> int:
+    """`--summarise DIR`: the summary of another trainer's seeds from `DIR/seed-K.eval.json` and `DIR/seed-K.csv`."""
+    folder: Path = a.summarise
+    evals = sorted(folder.glob("seed-*.eval.json")) if folder.is_dir() else []
+    results: dict[int, dict[str, Any]] = {}
+    for path in evals:
+        name = path.name[len("seed-") : -len(".eval.json")]
+        if not name.isdigit():
+            continue
+        try:
+            result = json.loads(path.read_text())
+            missing = [k for k in ("mean_return", "std_return", "episodes", "seed", "causes") if k not in result]
+        except (OSError, ValueError) as err:
+            print(f"error: {path}: not an evaluation JSON ({err})", file=sys.stderr)
+            return 2
+        if missing:
+            print(f"error: {path}: not an evaluation JSON (no {', '.join(missing)})", file=sys.stderr)
+            return 2
+        if (result["episodes"], result["seed"]) != (a.eval_episodes, a.eval_seed):
+            print(
+                f"error: {path} played {result['episodes']} episodes from seed {result['seed']}; this summary is "
+                f"of {a.eval_episodes} from {a.eval_seed} (give --eval-episodes and --eval-seed)",
+                file=sys.stderr,
+            )
+            return 2
+        results[int(name)] = result
+    if not results:
+        print(f"error: {folder} has no seed-K.eval.json to summarise", file=sys.stderr)
+        return 2
+    curves = {s: folder / f"seed-{s}.csv" for s in results}
+    lost = [str(c) for c in curves.values() if not c.is_file()]
+    if lost:
+        print(f"error: no training curve for every seed: {', '.join(lost)} missing", file=sys.stderr)
+        return 2
+    a.out, a.option = folder, []
+    try:
+        baselines = {name: _baseline(name, a) for name in ("random", "heuristic")}
+    except RuntimeError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+    summary = summarise(results, baselines, a.steps)
+    (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (folder / "summary.md").write_text(markdown(summary))
+    plot(folder, curves, summary, a.title)
     print(markdown(summary))
     return 0
 
