@@ -593,3 +593,39 @@ def test_cnn_act_runs_the_trunk_once_and_matches_both_heads(network, shape):
     before = xf.clone()
     torch.testing.assert_close(agent.act(xf, actions)[1], logp.detach(), rtol=0, atol=1e-6)
     assert torch.equal(xf, before)
+
+
+@needs_torch
+def test_auxiliary_features_train_the_trunk_only_and_leave_no_trace_in_the_model(tmp_path, capsys):
+    """`--aux-coef`: a twin features env in lockstep (its rewards checked every step), a loss on the CNN's trunk;
+    the saved model is an ordinary pixel model (no extra head) that evaluate plays. Refused for the features MLP."""
+    import torch
+
+    from chopperscape.learn import model, train
+
+    base = ["--preset", "pixels", "--steps", "600", "--num-envs", "4", "--num-steps", "32", "--seed", "5"]
+    base += ["--option", "obs_size=42x42", "--option", "max_fuel=120"]
+    assert train.main([*base, "--out", str(tmp_path / "aux"), "--aux-coef", "2"]) == 0
+    assert train.main([*base, "--out", str(tmp_path / "plain")]) == 0
+    capsys.readouterr()
+    aux = torch.load(tmp_path / "aux" / "model.pt", weights_only=True)
+    plain = torch.load(tmp_path / "plain" / "model.pt", weights_only=True)
+    assert json.loads((tmp_path / "aux" / "recipe.json").read_text())["aux_coef"] == 2.0
+    assert set(aux) == set(plain)  # no auxiliary head saved
+    assert all(aux[part].keys() == plain[part].keys() for part in ("actor", "critic"))
+    # The loss moved the trunk: the same run with a vanishing weight (the same twin and head, so the runs differ
+    # only by the loss's weight; 1e-30 is lost in rounding) ends elsewhere.
+    assert train.main([*base, "--out", str(tmp_path / "faint"), "--aux-coef", "1e-30"]) == 0
+    faint = torch.load(tmp_path / "faint" / "model.pt", weights_only=True)
+    assert not torch.equal(aux["actor"]["0.1.weight"], faint["actor"]["0.1.weight"])
+    assert isinstance(model.agent_from_checkpoint(aux), model.CnnAgent)
+    # The twin runs the same game: with equal seeds and actions, every reward and end matched (else it raises).
+    rows = _progress(tmp_path / "aux" / "progress.csv")
+    assert rows and int(rows[-1]["episodes"]) > 0
+    with pytest.raises(SystemExit):
+        train.main(["--steps", "100", "--out", str(tmp_path / "mlp"), "--aux-coef", "1"])
+    assert "`aux_coef`: the auxiliary features loss is for CNN recipes" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        train.main([*base, "--out", str(tmp_path / "neg"), "--aux-coef", "-1"])
+    assert "invalid value -1.0 for option `aux_coef`" in capsys.readouterr().err
+    assert not (tmp_path / "mlp").exists() and not (tmp_path / "neg").exists()

@@ -172,12 +172,21 @@ class CnnAgent(ActorCritic):
     def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
         """As :meth:`ActorCritic.act`, with the shared trunk run once for both heads (`actor(x)` and `critic(x)`
         each run it: twice the convolutions, forward and backward, for the same numbers)."""
+        return self.act_and_embed(x, action)[:4]
+
+    def act_and_embed(self, x: torch.Tensor, action: torch.Tensor | None = None):
+        """:meth:`act`'s four results and the trunk's output (the embedding both heads read), for auxiliary
+        losses on the trunk."""
         actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
         h = actor[0](x)
         dist = torch.distributions.Categorical(logits=actor[1](h))
         if action is None:
             action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), critic[1](h).squeeze(-1)
+        return action, dist.log_prob(action), dist.entropy(), critic[1](h).squeeze(-1), h
+
+    @property
+    def embedding_width(self) -> int:
+        return int(cast(nn.Linear, cast(nn.Sequential, self.actor)[1]).in_features)
 
 
 def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128) -> ActorCritic:

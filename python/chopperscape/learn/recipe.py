@@ -35,6 +35,7 @@ RECIPE_FLAGS = (
     "env_threads",
     "network",
     "device",
+    "aux_coef",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -97,6 +98,11 @@ class Recipe:
     env_threads: int = 1
     #: The step budget: the learning rate anneals linearly to 5 % over it.
     total_steps: int = DEFAULT_STEPS
+    #: Pixel recipes only: weight of an auxiliary loss that trains the CNN's trunk to predict the game's 46
+    #: `features` (standardised) from the frames, read from a twin env that the same seeds and actions keep in
+    #: the same state. Only training uses it: the policy still acts on frames alone, and the saved model has no
+    #: such head. 0 (the default) turns it off. See docs/learning.md ("Pixels").
+    aux_coef: float = 0.0
 
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -159,6 +165,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("ent_coef", r.ent_coef, 0.0, 1000.0)
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
     number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
+    number_in("aux_coef", r.aux_coef, 0.0, 1000.0)
     policy_seed(r.seed)
     for name in ("anneal_lr", "norm_obs", "norm_reward"):
         check_bool(name, getattr(r, name))
@@ -167,6 +174,11 @@ def check_recipe(recipe: Recipe) -> None:
     if r.network not in NETWORKS:
         raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
     check_device(r.device)
+    if r.aux_coef > 0 and (r.network == "mlp" or (r.network == "auto" and r.obs_type == "features")):
+        raise ValueError(
+            f"invalid value {r.aux_coef!r} for option `aux_coef`: the auxiliary features loss is for CNN recipes "
+            "(pixel observations); allowed 0 here"
+        )
     if not isinstance(r.env_options, dict):
         raise ValueError(f"invalid value {r.env_options!r} for option `env_options`: allowed a dict of env options")
     for name in r.env_options:

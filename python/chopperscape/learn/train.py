@@ -42,7 +42,7 @@ from .. import _signals
 from .._cli import ENV_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
-from .model import ObsNormalizer, RunningMeanStd, build_agent, save
+from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, save
 from .recipe import (
     DEFAULT_STEPS,
     PRESETS,
@@ -85,7 +85,26 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     network = network_of(recipe)
     device = torch.device(recipe.device)
     agent = build_agent(network, obs_shape, 5, recipe.hidden).to(device)
-    optimizer = torch.optim.Adam(agent.parameters(), lr=recipe.learning_rate, eps=1e-5)
+    # --- Auxiliary features (pixel recipes, `aux_coef > 0`) ---------------------------------------------------
+    # A twin env with `features` observations, reset with the same seeds and stepped with the same actions, is in
+    # the same state at every step (determinism); a linear head on the CNN's trunk learns to predict its
+    # standardised features. Only the trunk and that head see the loss; the head is not saved.
+    twin, aux_head, feat_norm = None, None, None
+    params = list(agent.parameters())
+    cnn = agent if isinstance(agent, CnnAgent) else None
+    if recipe.aux_coef > 0:
+        if cnn is None:
+            raise ValueError(f"invalid value {recipe.aux_coef!r} for option `aux_coef`: CNN recipes only; allowed 0")
+        pixel_only = ("obs_size", "frame_stack", "hud_style")
+        twin_options = {k: v for k, v in recipe.env_options.items() if k not in pixel_only}
+        twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
+        feat_dim = int((twin.single_observation_space.shape or (0,))[0])
+        with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
+            torch.manual_seed(recipe.seed + 1)
+            aux_head = nn.Linear(cnn.embedding_width, feat_dim).to(device)
+        feat_norm = ObsNormalizer((feat_dim,), True)
+        params += list(aux_head.parameters())
+    optimizer = torch.optim.Adam(params, lr=recipe.learning_rate, eps=1e-5)
     # Vector observations are standardised with running statistics; frames are scaled by the network itself.
     pixels = network != "mlp"
     obs_norm = ObsNormalizer(obs_shape, recipe.norm_obs and not pixels)
@@ -103,9 +122,13 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
     # With NEXT_STEP autoreset, the step after an episode's end is the reset step: no transition to learn from.
     buf_valid = torch.zeros((t_len, n), device=device)
+    buf_feat = torch.zeros((t_len, n, feat_dim) if twin is not None else (0,), device=device)
 
     raw, _ = envs.reset(seed=recipe.seed)
     next_obs = encode(raw)
+    if twin is not None and feat_norm is not None:
+        feat_raw, _ = twin.reset(seed=recipe.seed)
+        next_feat = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device)
     next_done = np.zeros(n, bool)  # the previous step ended an episode: this step is a reset step
     ep_return, ep_len = np.zeros(n), np.zeros(n, np.int64)
     finished: deque[tuple[float, int]] = deque(maxlen=100)
@@ -140,7 +163,16 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                     action, logp, _, value = agent.act(next_obs)
                 buf_obs[t], buf_act[t], buf_logp[t], buf_val[t] = next_obs, action, logp, value
                 buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
-                raw, reward, term, trunc, info = envs.step(action.cpu().numpy())
+                actions = action.cpu().numpy()
+                raw, reward, term, trunc, info = envs.step(actions)
+                if twin is not None and feat_norm is not None:
+                    buf_feat[t] = next_feat
+                    feat_raw, reward2, term2, trunc2, _ = twin.step(actions)
+                    if not (np.array_equal(reward, reward2) and np.array_equal(term, term2)):
+                        raise RuntimeError("the auxiliary twin env left the pixel env's game: rewards differ")
+                    if not np.array_equal(trunc, trunc2):
+                        raise RuntimeError("the auxiliary twin env left the pixel env's game: truncations differ")
+                    next_feat = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device)
                 env_steps += int(valid.sum())
                 done = term | trunc
                 # Episode statistics, on real (not reset) steps.
@@ -184,6 +216,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             b_act, b_logp = buf_act.reshape(-1)[mask], buf_logp.reshape(-1)[mask]
             b_adv, b_ret = adv.reshape(-1)[mask], returns.reshape(-1)[mask]
             b_val = buf_val.reshape(-1)[mask]
+            b_feat = buf_feat.reshape(-1, buf_feat.shape[-1])[mask] if twin is not None else None
             size = b_obs.shape[0]
 
             # --- Optimisation ------------------------------------------------------------------------------------
@@ -191,7 +224,12 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             for _ in range(recipe.update_epochs):
                 # Even minibatches (no tiny remainder, whose advantage std would be undefined).
                 for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
-                    _, logp, entropy, value = agent.act(b_obs[idx], b_act[idx])
+                    if cnn is not None and aux_head is not None and b_feat is not None:
+                        _, logp, entropy, value, h = cnn.act_and_embed(b_obs[idx], b_act[idx])
+                        aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
+                    else:
+                        _, logp, entropy, value = agent.act(b_obs[idx], b_act[idx])
+                        aux_loss = torch.zeros((), device=device)
                     log_ratio = logp - b_logp[idx]
                     ratio = log_ratio.exp()
                     a = b_adv[idx]
@@ -199,12 +237,12 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                     pg = torch.max(-a * ratio, -a * ratio.clamp(1 - recipe.clip_coef, 1 + recipe.clip_coef)).mean()
                     v_loss = 0.5 * ((value - b_ret[idx]) ** 2).mean()
                     ent = entropy.mean()
-                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss
+                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss + recipe.aux_coef * aux_loss
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {update}")
                     optimizer.zero_grad()
                     loss.backward()
-                    nn.utils.clip_grad_norm_(agent.parameters(), recipe.max_grad_norm)
+                    nn.utils.clip_grad_norm_(params, recipe.max_grad_norm)
                     optimizer.step()
                     with torch.no_grad():
                         # Schulman's low-variance KL estimator, as CleanRL logs it.
@@ -246,6 +284,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     finally:
         writer.close()
         envs.close()
+        if twin is not None:
+            twin.close()
         stop.restore()
     save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
