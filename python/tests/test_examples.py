@@ -1,4 +1,5 @@
-"""The behaviour-cloning example runs end to end (a few short episodes, one epoch); the registered id form
+"""The behaviour-cloning examples run end to end (from features: a few short episodes, one epoch; from frames: a
+few hundred decisions); the registered id form
 `"chopperscape:ChopperScape-v0"` works in a fresh interpreter without importing the package first; the vector env
 uses one thread unless asked."""
 
@@ -39,6 +40,32 @@ def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
     assert summary["dataset_steps"] == 400 and summary["dataset_episodes"] == 2
     for name in ("bc", "heuristic", "random"):
         assert summary[name]["episodes"] == 3 and 0 < summary[name]["mean"] <= 200
+
+
+def test_pixel_cloning_probe_runs_and_reports_accuracy_against_the_majority_action():
+    pytest.importorskip("torch", reason="torch is not installed: the pixel cloning smoke test is skipped")
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "python" / "examples" / "bc_pixels.py"),
+            "--samples",
+            "640",
+            "--epochs",
+            "1",
+            "--eval-episodes",
+            "2",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout.strip().splitlines()[-1])
+    assert summary["samples"] == 640 and summary["episodes"] == 2 and summary["mean_return"] > 0
+    # 64 held-out decisions: shares in steps of 1/64, the majority action's at least a fifth of them.
+    for key in ("held_out_accuracy", "majority_action_share"):
+        assert round(summary[key] * 64) == pytest.approx(summary[key] * 64, abs=0.05)
+    assert 0.2 <= summary["majority_action_share"] <= 1.0 and 0.0 <= summary["held_out_accuracy"] <= 1.0
 
 
 FRESH = """
