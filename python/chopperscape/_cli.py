@@ -14,6 +14,8 @@ from . import _core
 
 #: Every option of the core (`Config::set`), as `--option` takes it, `max_episode_steps` included.
 CORE_OPTIONS: tuple[str, ...] = tuple(_core.OPTION_NAMES)
+#: The core's rules options (`OptionInfo::rule`): what decides the game, as opposed to how it is observed.
+RULE_OPTIONS: tuple[str, ...] = tuple(o["name"] for o in _core.OPTIONS if o["rule"])
 #: Options the Python environments add to the core's (bools).
 PYTHON_BOOL_OPTIONS: tuple[str, ...] = ("keep_dim",)
 #: What `--option` takes by default: the options of `gymnasium.make("ChopperScape-v0", ...)`.

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
 import hashlib
 import json
 import math
@@ -32,16 +33,6 @@ from typing import Any
 WINDOW = 100
 _FINISHED = "_chopperscape_finished"
 _SAMPLED = "_chopperscape_sampled"
-
-
-class _NoWriter:
-    """Stands for the progress writer when nothing is trained (`--eval-only`)."""
-
-    def __enter__(self) -> _NoWriter:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -260,27 +251,25 @@ def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
     from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
 
     import chopperscape
+    from chopperscape.integrations.rllib import float_pixels
     from chopperscape.learn import evaluate as chopper_eval
 
     module = algo.get_module()
-    states = [s for s in algo.env_runner_group.foreach_env_runner(observation_filter_state) if s]
+    probe = chopperscape.VectorEnv(1, **args.env_config)
+    space = probe.single_observation_space
+    probe.close()
     normalise = None
-    space_ndim = len(chopperscape.VectorEnv(1, **args.env_config).single_observation_space.shape)
     if args.env_config.get("obs_type") == "features":
+        states = [s for s in algo.env_runner_group.foreach_env_runner(observation_filter_state) if s]
         if not states:
             raise SystemExit("error: no runner has the observation filter's statistics to evaluate with")
-        space = chopperscape.VectorEnv(1, **args.env_config).single_observation_space
         obs_filter = MeanStdFilter()  # (given the space in its constructor, it reads its clip before setting it)
         obs_filter.input_observation_space = space
         obs_filter.set_state(states[0])
         normalise = obs_filter._filters[None]
 
     def act(obs: np.ndarray, _envs: Any) -> np.ndarray:
-        if normalise is not None:
-            x = normalise(obs, update=False)
-        else:  # FloatPixels, batched: [0, 1] floats, a channel axis for plain grayscale
-            x = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs
-            x = x[..., None] if x.ndim == 3 and space_ndim == 2 else x
+        x = normalise(obs, update=False) if normalise is not None else float_pixels(obs, len(space.shape))
         with torch.no_grad():
             out = module.forward_inference({"obs": torch.as_tensor(np.asarray(x, dtype=np.float32))})
         return out["action_dist_inputs"].argmax(-1).cpu().numpy()
@@ -357,7 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     env_steps = 0
     iterations = 0
     start = time.monotonic()
-    with progress.Writer(args.csv, progress.RETURNS) if not args.eval_only else _NoWriter() as out:
+    with progress.Writer(args.csv, progress.RETURNS) if not args.eval_only else contextlib.nullcontext() as out:
         while not args.eval_only:
             result = algo.train()
             iterations += 1

@@ -15,28 +15,23 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
-    pytest.importorskip("torch", reason="torch is not installed: the behaviour-cloning smoke test is skipped")
-    pytest.importorskip("minari", reason="minari is not installed: the behaviour-cloning smoke test is skipped")
+def _example(script: str, *args: str) -> dict:
+    """Runs `python/examples/SCRIPT ARGS...` and returns its last line, a JSON summary."""
     done = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "python" / "examples" / "bc_train.py"),
-            "--episodes",
-            "2",
-            "--epochs",
-            "1",
-            "--eval-episodes",
-            "3",
-            "--max-episode-steps",
-            "200",
-        ],
+        [sys.executable, str(ROOT / "python" / "examples" / script), *args],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
-    summary = json.loads(done.stdout.strip().splitlines()[-1])
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
+    pytest.importorskip("torch", reason="torch is not installed: the behaviour-cloning smoke test is skipped")
+    pytest.importorskip("minari", reason="minari is not installed: the behaviour-cloning smoke test is skipped")
+    args = ("--episodes", "2", "--epochs", "1", "--eval-episodes", "3", "--max-episode-steps", "200")
+    summary = _example("bc_train.py", *args)
     assert summary["dataset_steps"] == 400 and summary["dataset_episodes"] == 2
     for name in ("bc", "heuristic", "random"):
         assert summary[name]["episodes"] == 3 and 0 < summary[name]["mean"] <= 200
@@ -44,23 +39,7 @@ def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
 
 def test_pixel_cloning_probe_runs_and_reports_accuracy_against_the_majority_action():
     pytest.importorskip("torch", reason="torch is not installed: the pixel cloning smoke test is skipped")
-    done = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "python" / "examples" / "bc_pixels.py"),
-            "--samples",
-            "640",
-            "--epochs",
-            "1",
-            "--eval-episodes",
-            "2",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert done.returncode == 0, done.stderr
-    summary = json.loads(done.stdout.strip().splitlines()[-1])
+    summary = _example("bc_pixels.py", "--samples", "640", "--epochs", "1", "--eval-episodes", "2")
     assert summary["samples"] == 640 and summary["episodes"] == 2 and summary["mean_return"] > 0
     # 64 held-out decisions: shares in steps of 1/64, the majority action's at least a fifth of them.
     for key in ("held_out_accuracy", "majority_action_share"):

@@ -68,6 +68,7 @@ __all__ = [
     "ReturnScaling",
     "check_env_config",
     "env_creator",
+    "float_pixels",
     "register",
     "runner_seeds",
 ]
@@ -187,9 +188,15 @@ class FloatPixels(SingleAgentObservationPreprocessor):
         return gym.spaces.Box(0.0, 1.0, shape + (1,) if len(shape) == 2 else shape, np.float32)
 
     def preprocess(self, observation, episode):
-        obs = np.asarray(observation)
-        obs = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs.astype(np.float32, copy=False)
-        return obs[..., None] if obs.ndim == 2 else obs
+        return float_pixels(observation, np.ndim(observation))
+
+
+def float_pixels(obs: Any, frame_ndim: int) -> np.ndarray:
+    """What :class:`FloatPixels` makes of pixel observations, for one observation or a batch of them: `float32` in
+    [0, 1] (from `uint8`), with a channel axis when one observation is a plain grayscale frame (`frame_ndim` 2)."""
+    obs = np.asarray(obs)
+    obs = obs.astype(np.float32) / 255.0 if obs.dtype == np.uint8 else obs.astype(np.float32, copy=False)
+    return obs[..., None] if frame_ndim == 2 else obs
 
 
 class ReturnScaling(ConnectorV2):

@@ -327,11 +327,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
     a, forward = p.parse_known_args(argv)
+    if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
+        p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
     if a.summarise is not None:
         if a.seeds or a.out or forward:
             p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
-        if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
-            p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
         return summarise_folder(a)
     if a.seeds is None or a.out is None:
         p.error("--seeds and --out are required (or --summarise DIR)")
@@ -343,8 +343,6 @@ def main(argv: list[str] | None = None) -> int:
         seeds = parse_seeds(a.seeds)
     except ValueError as err:
         p.error(str(err))
-    if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
-        p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
     jobs = a.jobs or max(1, min(len(seeds), os.cpu_count() or 1))
     if jobs < 1:
         p.error(f"--jobs {a.jobs}: allowed an integer >= 1")
@@ -361,10 +359,23 @@ def main(argv: list[str] | None = None) -> int:
     except RuntimeError as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
-    summary = summarise(results, baselines, a.steps)
-    (a.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (a.out / "summary.md").write_text(markdown(summary))
-    plot(a.out, {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}, summary, a.title)
+    curves = {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}
+    return write_summary(a.out, results, baselines, curves, a.steps, a.title)
+
+
+def write_summary(
+    out: Path,
+    results: dict[int, dict[str, Any]],
+    baselines: dict[str, dict[str, Any]],
+    curves: dict[int, Path],
+    steps: int,
+    title: str,
+) -> int:
+    """Writes `summary.json`, `summary.md` and `curves.png` into `out` and prints the table; 0."""
+    summary = summarise(results, baselines, steps)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (out / "summary.md").write_text(markdown(summary))
+    plot(out, curves, summary, title)
     print(markdown(summary))
     return 0
 
@@ -409,12 +420,7 @@ def summarise_folder(a: argparse.Namespace) -> int:
     except RuntimeError as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
-    summary = summarise(results, baselines, a.steps)
-    (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (folder / "summary.md").write_text(markdown(summary))
-    plot(folder, curves, summary, a.title)
-    print(markdown(summary))
-    return 0
+    return write_summary(folder, results, baselines, curves, a.steps, a.title)
 
 
 if __name__ == "__main__":

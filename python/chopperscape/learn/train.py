@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _signals
-from .._cli import ENV_OPTIONS, env_options, print_line
+from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
 from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, save
@@ -95,8 +95,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     if recipe.aux_coef > 0:
         if cnn is None:
             raise ValueError(f"invalid value {recipe.aux_coef!r} for option `aux_coef`: CNN recipes only; allowed 0")
-        pixel_only = ("obs_size", "frame_stack", "hud_style")
-        twin_options = {k: v for k, v in recipe.env_options.items() if k not in pixel_only}
+        twin_options = {k: v for k, v in recipe.env_options.items() if k in RULE_OPTIONS}
         twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
         feat_dim = int((twin.single_observation_space.shape or (0,))[0])
         with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
@@ -168,10 +167,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 if twin is not None and feat_norm is not None:
                     buf_feat[t] = next_feat
                     feat_raw, reward2, term2, trunc2, _ = twin.step(actions)
-                    if not (np.array_equal(reward, reward2) and np.array_equal(term, term2)):
-                        raise RuntimeError("the auxiliary twin env left the pixel env's game: rewards differ")
-                    if not np.array_equal(trunc, trunc2):
-                        raise RuntimeError("the auxiliary twin env left the pixel env's game: truncations differ")
+                    if not all(map(np.array_equal, (reward, term, trunc), (reward2, term2, trunc2))):
+                        raise RuntimeError("the auxiliary twin env left the pixel env's game (rewards or ends differ)")
                     next_feat = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device)
                 env_steps += int(valid.sum())
                 done = term | trunc
