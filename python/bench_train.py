@@ -54,7 +54,8 @@ def parts(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
     for _ in range(repeats * 20):
         obs, *_ = envs.step(actions)
     env = (time.process_time() - t) / (repeats * 20 * n)
-    agent = model.build_agent(network_of(recipe), tuple(envs.single_observation_space.shape)).to(recipe.device)
+    shape = tuple(envs.single_observation_space.shape)
+    agent = model.build_agent(network_of(recipe), shape, invert_frames=recipe.invert_frames).to(recipe.device)
     envs.close()
     x = torch.from_numpy(np.ascontiguousarray(obs)).to(recipe.device)
     if recipe.obs_type == "features":

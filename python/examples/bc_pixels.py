@@ -49,7 +49,7 @@ def main() -> None:
     import torch
 
     from chopperscape.learn import evaluate, model
-    from chopperscape.learn.recipe import PRESETS
+    from chopperscape.learn.recipe import PRESETS, Recipe
 
     torch.manual_seed(a.seed)
     torch.set_num_threads(1)
@@ -57,7 +57,7 @@ def main() -> None:
     options = {"obs_type": pixels["obs_type"], **pixels["env_options"]}
     t0 = time.monotonic()
     x, y = collect(a.samples, 32, a.seed, options)
-    agent = model.build_agent(pixels["network"], tuple(x.shape[1:]))
+    agent = model.build_agent(pixels["network"], tuple(x.shape[1:]), invert_frames=Recipe().invert_frames)
     opt = torch.optim.Adam(agent.parameters(), lr=3e-4)
     xt, yt = torch.from_numpy(x), torch.from_numpy(y)
     split = int(0.9 * len(x))  # the last 10 % (the latest decisions of each env) held out for accuracy

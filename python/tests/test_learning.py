@@ -4,9 +4,12 @@ through it, and Gymnasium's vector wrappers on the native batch. Smoke sizes onl
 
 from __future__ import annotations
 
+import contextlib
+import csv
 import importlib.util
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -629,3 +632,139 @@ def test_auxiliary_features_train_the_trunk_only_and_leave_no_trace_in_the_model
         train.main([*base, "--out", str(tmp_path / "neg"), "--aux-coef", "-1"])
     assert "invalid value -1.0 for option `aux_coef`" in capsys.readouterr().err
     assert not (tmp_path / "mlp").exists() and not (tmp_path / "neg").exists()
+
+
+@needs_torch
+def test_cnn_reads_inverted_frames_and_old_models_keep_plain_ones(tmp_path):
+    """Recipe CNNs read ``1 - frame / 255`` (the white sky as 0); a 0.1.0 checkpoint, whose recipe has no
+    `invert_frames`, is rebuilt reading ``frame / 255`` and gives the logits it was saved with."""
+    import torch
+
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import Recipe
+
+    x = torch.tensor([[[0, 51], [255, 204]]], dtype=torch.uint8)
+    torch.testing.assert_close(model.Frames(invert=True)(x), 1 - x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    torch.testing.assert_close(model.Frames()(x), x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    assert Recipe().invert_frames is True
+    shape = (42, 42, 2)
+    frames = torch.randint(0, 256, (5, *shape), dtype=torch.uint8)
+    for invert in (True, False):
+        torch.manual_seed(3)
+        agent = model.build_agent("small", shape, invert_frames=invert)
+        recipe = Recipe(obs_type="grayscale", network="small", invert_frames=invert)
+        path = tmp_path / f"invert-{invert}.pt"
+        model.save(path, agent, model.ObsNormalizer(shape, False), recipe, shape, 0)
+        if not invert:  # as 0.1.0 wrote it: no such key
+            payload = torch.load(path, weights_only=True)
+            del payload["recipe"]["invert_frames"]
+            torch.save(payload, path)
+        loaded = model.load(path).agent
+        assert cast_frames(loaded).invert is invert
+        torch.testing.assert_close(loaded.actor(frames), agent.actor(frames), rtol=0, atol=0)
+    # The two readings are different inputs: the same weights give other logits.
+    torch.manual_seed(3)
+    plain = model.build_agent("small", shape)
+    torch.manual_seed(3)
+    inverted = model.build_agent("small", shape, invert_frames=True)
+    assert not torch.allclose(plain.actor(frames), inverted.actor(frames))
+
+
+def cast_frames(agent):
+    """The `Frames` layer at the front of a CNN agent's trunk."""
+    return agent.actor[0][0]
+
+
+def _teacher_file(path, rules, favourite=3):
+    """A features model as `train` writes it, whose policy plays `favourite` nearly always (a strong bias on its
+    output layer), on the rules options `rules`."""
+    import torch
+
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import Recipe
+
+    torch.manual_seed(0)
+    agent = model.build_agent("mlp", (46,), hidden=16)
+    with torch.no_grad():
+        agent.actor[-1].bias[favourite] = 8.0
+    recipe = Recipe(obs_type="features", env_options=dict(rules), hidden=16)
+    model.save(path, agent, model.ObsNormalizer((46,), True), recipe, (46,), 0)
+    return path
+
+
+def _column(path, name):
+    """One column of a progress CSV, as written."""
+    with open(path, newline="") as f:
+        return [row[name] for row in csv.DictReader(f)]
+
+
+@needs_torch
+def test_a_teacher_pulls_the_pixel_policy_toward_it_and_changes_nothing_at_weight_zero(tmp_path, capsys):
+    """`--teacher`: KL(teacher ‖ policy) on the policy's own rollouts, read from a twin features env. At weight 0 the
+    run is the plain run bit for bit (the twin only watches); with weight the KL falls and the greedy policy plays
+    the teacher's action; the saved model is a plain pixel model."""
+    import torch
+
+    from chopperscape.learn import model, train
+
+    rules = {"frame_skip": 2, "max_fuel": 150}
+    teacher = _teacher_file(tmp_path / "teacher.pt", rules)
+    base = ["--preset", "pixels", "--steps", "1500", "--num-envs", "4", "--num-steps", "32", "--seed", "2"]
+    base += ["--option", "obs_size=42x42", "--option", "frame_skip=2", "--option", "max_fuel=150"]
+    assert train.main([*base, "--out", str(tmp_path / "plain")]) == 0
+    assert train.main([*base, "--out", str(tmp_path / "zero"), "--teacher", str(teacher), "--teacher-coef", "0"]) == 0
+    assert train.main([*base, "--out", str(tmp_path / "taught"), "--teacher", str(teacher), "--teacher-coef", "5"]) == 0
+    capsys.readouterr()
+    plain, zero, taught = (
+        torch.load(tmp_path / r / "model.pt", weights_only=True) for r in ("plain", "zero", "taught")
+    )
+    assert set(taught) == set(plain) and taught["actor"].keys() == plain["actor"].keys()
+    assert all(torch.equal(zero["actor"][k], plain["actor"][k]) for k in plain["actor"])
+    assert not torch.equal(taught["actor"]["1.weight"], plain["actor"]["1.weight"])
+    kl = [float(v) for v in _column(tmp_path / "taught" / "progress.csv", "teacher_kl")]
+    assert kl[-1] < kl[0] / 2, kl
+    assert set(_column(tmp_path / "plain" / "progress.csv", "teacher_kl")) == {""}
+    # The taught policy flies Up (the teacher's action) from frames it has never seen; the plain one does not.
+    frames = torch.randint(0, 256, (64, 42, 42, 4), dtype=torch.uint8)
+    for run, want in (("taught", True), ("plain", False)):
+        agent = model.load(tmp_path / run / "model.pt").agent
+        with torch.no_grad():
+            up = (agent.actor(frames).argmax(-1) == 3).float().mean().item()
+        assert (up > 0.9) is want, (run, up)
+
+
+@needs_torch
+def test_a_teacher_is_refused_unless_it_fits_before_anything_is_written(tmp_path, capsys):
+    from chopperscape.learn import train
+
+    good = _teacher_file(tmp_path / "t.pt", {"frame_skip": 4})
+    other_rules = _teacher_file(tmp_path / "fs2.pt", {"frame_skip": 2})
+    same_by_default = _teacher_file(tmp_path / "fs4.pt", {"frame_skip": 4.0, "alien_prob": 0.0, "max_fuel": 1000})
+    (tmp_path / "junk.pt").write_bytes(b"not a model")
+    base = ["--preset", "pixels", "--steps", "300", "--num-envs", "2", "--num-steps", "32"]
+    cases = [
+        ([*base, "--teacher", str(tmp_path / "none.pt")], "no such file"),
+        ([*base, "--teacher", str(tmp_path / "junk.pt")], "is not a chopperscape.learn.train model"),
+        ([*base, "--teacher", str(other_rules)], r"learned other rules \(\{'frame_skip': 2.0\}\) than this run's"),
+        (["--steps", "300", "--teacher", str(good)], "a features teacher guides CNN recipes"),
+        (
+            [*base, "--teacher", str(good), "--teacher-fade", "0"],
+            r"`teacher_fade`: allowed a finite number in \(0, 1\]",
+        ),
+        ([*base, "--teacher", str(good), "--teacher-coef", "-1"], "`teacher_coef`"),
+    ]
+    for args, message in cases:
+        out = tmp_path / "run"
+        with pytest.raises(SystemExit) if "teacher_" in message or "guides" in message else contextlib.nullcontext():
+            assert train.main([*args, "--out", str(out)]) == 2
+        assert re.search(message, capsys.readouterr().err), message
+        assert not out.exists()
+    # A pixel teacher is refused by name.
+    pixel_run = tmp_path / "pix"
+    assert train.main([*base, "--option", "obs_size=42x42", "--out", str(pixel_run)]) == 0
+    capsys.readouterr()
+    assert train.main([*base, "--teacher", str(pixel_run / "model.pt"), "--out", str(tmp_path / "run")]) == 2
+    assert "a teacher must be a features model" in capsys.readouterr().err
+    # Rules spelled with their defaults are the same rules.
+    assert train.main([*base, "--option", "obs_size=42x42", "--teacher", str(same_by_default), "--out",
+                       str(tmp_path / "ok")]) == 0  # fmt: skip

@@ -79,7 +79,8 @@ def test_the_schema_is_the_documented_contract():
         "learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss",
     )  # fmt: skip
     assert progress.ENDINGS == ("ended", "bird", "fuel", "limit")
-    assert progress.COLUMNS == progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS
+    assert progress.GUIDANCE == ("aux_loss", "teacher_kl")
+    assert progress.COLUMNS == progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS + progress.GUIDANCE
 
 
 def test_every_refusal_names_the_file_first(tmp_path):

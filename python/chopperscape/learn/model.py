@@ -120,12 +120,25 @@ class Agent(ActorCritic):
 class Frames(nn.Module):
     """The env's grayscale observation as the convolutions want it: ``(N, H, W)`` or ``(N, H, W, k)`` (k stacked
     frames, uint8 or float in 0..255) to ``(N, k, H, W)`` floats in [0, 1]. Part of the network, so that a
-    saved or exported policy takes the env's observation unchanged."""
+    saved or exported policy takes the env's observation unchanged.
+
+    With `invert`, the floats are ``1 - x / 255``: ChopperScape's sky is white, so plain scaling gives every input
+    a large constant (1.0 nearly everywhere) on which the sprites are small dips. Through ReLU convolutions that
+    constant dominates the trunk's output (measured at initialisation on random play: the embedding varies by 7 %
+    of its mean across frames, and 38 % of its units never fire) and PPO's policy settles on one action. Inverted,
+    the sky is 0 and the sprites and the gauge are positive, as on Atari's dark screens (ratio 44 %, 6 % dead).
+    Models of chopperscape 0.1.0 read plain frames (`Recipe.invert_frames` is False for them)."""
+
+    def __init__(self, invert: bool = False):
+        super().__init__()
+        self.invert = invert
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         # Permuted first, cast after: the floats come out channels-last in memory, which the CPU convolutions
         # read faster than a strided view of NHWC floats (and the same numbers).
         x = x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
+        if self.invert:
+            return 1.0 - x.float() * (1.0 / 255.0)
         return x.float() * (1.0 / 255.0)
 
 
@@ -143,13 +156,13 @@ class CnnAgent(ActorCritic):
     """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy).
     `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
-    def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str):
+    def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
         super().__init__()
         h, w = obs_shape[:2]
         stack = obs_shape[2] if len(obs_shape) == 3 else 1
         name = "small-42" if network == "small" and min(h, w) < 64 else network
         convs, width = CNNS[name]
-        layers: list[nn.Module] = [Frames()]
+        layers: list[nn.Module] = [Frames(invert_frames)]
         channels = stack
         for out, kernel, stride in convs:
             layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
@@ -177,20 +190,28 @@ class CnnAgent(ActorCritic):
     def act_and_embed(self, x: torch.Tensor, action: torch.Tensor | None = None):
         """:meth:`act`'s four results and the trunk's output (the embedding both heads read), for auxiliary
         losses on the trunk."""
-        actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
-        h = actor[0](x)
-        dist = torch.distributions.Categorical(logits=actor[1](h))
+        logits, value, h = self.heads(x)
+        dist = torch.distributions.Categorical(logits=logits)
         if action is None:
             action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), critic[1](h).squeeze(-1), h
+        return action, dist.log_prob(action), dist.entropy(), value, h
+
+    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """`(logits, value, embedding)` from one pass of the trunk."""
+        actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
+        h = actor[0](x)
+        return actor[1](h), critic[1](h).squeeze(-1), h
 
     @property
     def embedding_width(self) -> int:
         return int(cast(nn.Linear, cast(nn.Sequential, self.actor)[1]).in_features)
 
 
-def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128) -> ActorCritic:
-    """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's)."""
+def build_agent(
+    network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128, invert_frames: bool = False
+) -> ActorCritic:
+    """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's); a CNN reads
+    inverted frames with `invert_frames` (see :class:`Frames`)."""
     if network == "mlp":
         if len(obs_shape) != 1:
             raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
@@ -199,7 +220,7 @@ def build_agent(network: str, obs_shape: tuple[int, ...], num_actions: int = 5, 
         raise ValueError(f"invalid network {network!r}: allowed 'auto', 'mlp', 'small', 'nature'")
     if len(obs_shape) not in (2, 3):
         raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
-    return CnnAgent(tuple(obs_shape), num_actions, network)
+    return CnnAgent(tuple(obs_shape), num_actions, network, invert_frames)
 
 
 def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCritic:
@@ -239,7 +260,8 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
         )
     network = network_of(recipe)
     try:
-        agent = build_agent(network, tuple(shape), 5, int(hidden or 0))
+        # 0.1.0's models have no `invert_frames`: they read plain frames.
+        agent = build_agent(network, tuple(shape), 5, int(hidden or 0), recipe.get("invert_frames", False) is True)
     except ValueError as e:
         raise bad("recipe.network", str(e)) from None
     for part in ("actor", "critic"):

@@ -9,7 +9,9 @@ they have no per-update diagnostics of their own). Readers: ``python -m choppers
 - :data:`DIAGNOSTICS`: the update's learning rate, policy entropy, approximate KL (``(ratio - 1) - log ratio``),
   clip fraction, explained variance of the value targets, value and policy losses (means over its minibatches);
 - :data:`ENDINGS`: how many episodes ended during the update, and the shares among them that a bird, the fuel and
-  the step limit ended (blank when none ended).
+  the step limit ended (blank when none ended);
+- :data:`GUIDANCE`: the pixel recipes' training-only losses, means over the update's minibatches, blank when off: the
+  auxiliary features loss (``--aux-coef``) and KL(teacher ‖ policy) (``--teacher``).
 """
 
 from __future__ import annotations
@@ -23,8 +25,9 @@ from typing import Any, TextIO
 RETURNS = ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length")
 DIAGNOSTICS = ("learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss")
 ENDINGS = ("ended", "bird", "fuel", "limit")
+GUIDANCE = ("aux_loss", "teacher_kl")
 #: The columns ``chopperscape.learn.train`` writes, in order.
-COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS
+COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE
 
 
 class Writer:

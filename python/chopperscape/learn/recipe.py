@@ -36,6 +36,9 @@ RECIPE_FLAGS = (
     "network",
     "device",
     "aux_coef",
+    "teacher",
+    "teacher_coef",
+    "teacher_fade",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -103,6 +106,18 @@ class Recipe:
     #: the same state. Only training uses it: the policy still acts on frames alone, and the saved model has no
     #: such head. 0 (the default) turns it off. See docs/learning.md ("Pixels").
     aux_coef: float = 0.0
+    #: CNN recipes only: the network reads ``1 - frame / 255`` (the white sky as 0, sprites and the gauge
+    #: positive) rather than ``frame / 255``; see :class:`chopperscape.learn.model.Frames` for why. Models of
+    #: chopperscape 0.1.0 have no such setting and read plain frames.
+    invert_frames: bool = True
+    #: Pixel recipes only: a features model (from this trainer, on the same rules) that guides the CNN early on
+    #: ("kickstarting", Schmitt et al. 2018). The loss adds `teacher_coef` × KL(teacher ‖ policy) on the policy's
+    #: own rollouts (so, unlike cloning, the states are those the policy visits), the teacher reading a twin
+    #: features env kept in lockstep. The weight falls linearly to 0 at `teacher_fade` × `total_steps`; from there
+    #: on the run is plain PPO. Training only: the saved model is a plain pixel model. "" (the default): no teacher.
+    teacher: str = ""
+    teacher_coef: float = 1.0
+    teacher_fade: float = 1.0
 
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -166,18 +181,28 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
     number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
     number_in("aux_coef", r.aux_coef, 0.0, 1000.0)
+    number_in("teacher_coef", r.teacher_coef, 0.0, 1000.0)
+    number_in("teacher_fade", r.teacher_fade, 0.0, 1.0, low_open=True)
+    if not isinstance(r.teacher, str):
+        raise ValueError(f"invalid value {r.teacher!r} for option `teacher`: allowed a model file's path, or ''")
     policy_seed(r.seed)
-    for name in ("anneal_lr", "norm_obs", "norm_reward"):
+    for name in ("anneal_lr", "norm_obs", "norm_reward", "invert_frames"):
         check_bool(name, getattr(r, name))
     if not isinstance(r.obs_type, str):
         raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
     if r.network not in NETWORKS:
         raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
     check_device(r.device)
-    if r.aux_coef > 0 and (r.network == "mlp" or (r.network == "auto" and r.obs_type == "features")):
+    mlp = r.network == "mlp" or (r.network == "auto" and r.obs_type == "features")
+    if r.aux_coef > 0 and mlp:
         raise ValueError(
             f"invalid value {r.aux_coef!r} for option `aux_coef`: the auxiliary features loss is for CNN recipes "
             "(pixel observations); allowed 0 here"
+        )
+    if r.teacher and mlp:
+        raise ValueError(
+            f"invalid value {r.teacher!r} for option `teacher`: a features teacher guides CNN recipes (pixel "
+            "observations); allowed '' here"
         )
     if not isinstance(r.env_options, dict):
         raise ValueError(f"invalid value {r.env_options!r} for option `env_options`: allowed a dict of env options")

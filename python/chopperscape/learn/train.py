@@ -42,7 +42,7 @@ from .. import _signals
 from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
-from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, save
+from .model import CnnAgent, Model, ObsNormalizer, RunningMeanStd, build_agent, load, save
 from .recipe import (
     DEFAULT_STEPS,
     PRESETS,
@@ -67,6 +67,42 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
 CSV_COLUMNS = list(progress.COLUMNS)
 
 
+def _rules(options: dict) -> dict:
+    """The rules options among env `options`, as comparable values (numbers as floats), those equal to their default
+    left out: `{}`, `{"frame_skip": 1}` and `{"alien_prob": 0.0}` are the same rules."""
+    from .. import _core
+
+    def value(v: object) -> object:
+        try:
+            return float(v) if not isinstance(v, bool) else str(v).lower()  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return str(v).lower()
+
+    defaults = {o["name"]: value(o["default"]) for o in _core.OPTIONS}
+    return {k: value(v) for k, v in options.items() if k in RULE_OPTIONS and value(v) != defaults[k]}
+
+
+def load_teacher(recipe: Recipe) -> Model:
+    """The features model `recipe.teacher` names, checked to guide this recipe: a features MLP trained on the same
+    rules (frame skip included). `ValueError` in one line otherwise; the file is read as data
+    (`torch.load(weights_only=True)`), never run."""
+    if not Path(recipe.teacher).is_file():
+        raise ValueError(f"teacher {recipe.teacher!r}: no such file (give a features model.pt from this trainer)")
+    teacher = load(Path(recipe.teacher), f"teacher {recipe.teacher!r}")
+    if teacher.recipe["obs_type"] != "features" or len(teacher.obs_shape) != 1:
+        raise ValueError(
+            f"teacher {recipe.teacher!r} learned {teacher.recipe['obs_type']!r} observations: a teacher must be a "
+            "features model (--obs-type features)"
+        )
+    mine, theirs = _rules(recipe.env_options), _rules(teacher.recipe.get("env_options", {}))
+    if mine != theirs:
+        raise ValueError(
+            f"teacher {recipe.teacher!r} learned other rules ({theirs or 'the defaults'}) than this run's "
+            f"({mine or 'the defaults'}): train the teacher with the same rules options, frame_skip included"
+        )
+    return teacher
+
+
 def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False) -> Path:
     """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
@@ -76,6 +112,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     check_recipe(recipe)
     check_minutes(minutes)
     check_run_folder(out, force)
+    teacher = load_teacher(recipe) if recipe.teacher else None
     torch.manual_seed(recipe.seed)
     torch.set_num_threads(recipe.torch_threads)
     rng = np.random.default_rng(recipe.seed)
@@ -84,25 +121,33 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
-    agent = build_agent(network, obs_shape, 5, recipe.hidden).to(device)
-    # --- Auxiliary features (pixel recipes, `aux_coef > 0`) ---------------------------------------------------
+    agent = build_agent(network, obs_shape, 5, recipe.hidden, recipe.invert_frames).to(device)
+    # --- Guidance from the game's features (pixel recipes: `aux_coef > 0`, `teacher`) ---------------------------
     # A twin env with `features` observations, reset with the same seeds and stepped with the same actions, is in
-    # the same state at every step (determinism); a linear head on the CNN's trunk learns to predict its
-    # standardised features. Only the trunk and that head see the loss; the head is not saved.
+    # the same state at every step (determinism). A linear head on the CNN's trunk learns to predict its
+    # standardised features (`aux_coef`); a features teacher reads it and the policy is pulled toward the
+    # teacher's action probabilities (`teacher`). Only training sees either; the saved model is a pixel model.
     twin, aux_head, feat_norm = None, None, None
     params = list(agent.parameters())
     cnn = agent if isinstance(agent, CnnAgent) else None
-    if recipe.aux_coef > 0:
+    feat_dim = 0
+    if recipe.aux_coef > 0 or teacher is not None:
         if cnn is None:
-            raise ValueError(f"invalid value {recipe.aux_coef!r} for option `aux_coef`: CNN recipes only; allowed 0")
+            raise ValueError("the auxiliary loss and the teacher are for CNN recipes (pixel observations) only")
         twin_options = {k: v for k, v in recipe.env_options.items() if k in RULE_OPTIONS}
+        if teacher is not None:  # the teacher's own observation settings (a frame-stacked teacher, say)
+            seen = teacher.recipe.get("env_options", {}).items()
+            twin_options.update({k: v for k, v in seen if k not in RULE_OPTIONS and k != "obs_type"})
         twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
         feat_dim = int((twin.single_observation_space.shape or (0,))[0])
+    if recipe.aux_coef > 0 and cnn is not None:
+        feat_norm = ObsNormalizer((feat_dim,), True)
         with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
             torch.manual_seed(recipe.seed + 1)
             aux_head = nn.Linear(cnn.embedding_width, feat_dim).to(device)
-        feat_norm = ObsNormalizer((feat_dim,), True)
         params += list(aux_head.parameters())
+    if teacher is not None:
+        teacher.agent.to(device)
     optimizer = torch.optim.Adam(params, lr=recipe.learning_rate, eps=1e-5)
     # Vector observations are standardised with running statistics; frames are scaled by the network itself.
     pixels = network != "mlp"
@@ -121,13 +166,25 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
     # With NEXT_STEP autoreset, the step after an episode's end is the reset step: no transition to learn from.
     buf_valid = torch.zeros((t_len, n), device=device)
-    buf_feat = torch.zeros((t_len, n, feat_dim) if twin is not None else (0,), device=device)
+    buf_feat = torch.zeros((t_len, n, feat_dim) if aux_head is not None else (0,), device=device)
+    # The teacher's log-probabilities of the five actions in each stored state.
+    buf_teach = torch.zeros((t_len, n, 5) if teacher is not None else (0,), device=device)
+
+    def guidance(feat_raw: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
+        """The twin's features as the auxiliary head's target (standardised by running statistics) and the
+        teacher's log-probabilities on them (its own frozen statistics)."""
+        target = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device) if feat_norm else torch.zeros(0)
+        if teacher is None:
+            return target, torch.zeros(0)
+        with torch.no_grad():
+            logits = teacher.agent.actor(torch.from_numpy(teacher.norm(feat_raw)).to(device))
+        return target, torch.log_softmax(logits, -1)
 
     raw, _ = envs.reset(seed=recipe.seed)
     next_obs = encode(raw)
-    if twin is not None and feat_norm is not None:
+    if twin is not None:
         feat_raw, _ = twin.reset(seed=recipe.seed)
-        next_feat = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device)
+        next_feat, next_teach = guidance(feat_raw)
     next_done = np.zeros(n, bool)  # the previous step ended an episode: this step is a reset step
     ep_return, ep_len = np.zeros(n), np.zeros(n, np.int64)
     finished: deque[tuple[float, int]] = deque(maxlen=100)
@@ -164,12 +221,15 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
                 actions = action.cpu().numpy()
                 raw, reward, term, trunc, info = envs.step(actions)
-                if twin is not None and feat_norm is not None:
-                    buf_feat[t] = next_feat
+                if twin is not None:
+                    if aux_head is not None:
+                        buf_feat[t] = next_feat
+                    if teacher is not None:
+                        buf_teach[t] = next_teach
                     feat_raw, reward2, term2, trunc2, _ = twin.step(actions)
                     if not all(map(np.array_equal, (reward, term, trunc), (reward2, term2, trunc2))):
-                        raise RuntimeError("the auxiliary twin env left the pixel env's game (rewards or ends differ)")
-                    next_feat = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device)
+                        raise RuntimeError("the features twin env left the pixel env's game (rewards or ends differ)")
+                    next_feat, next_teach = guidance(feat_raw)
                 env_steps += int(valid.sum())
                 done = term | trunc
                 # Episode statistics, on real (not reset) steps.
@@ -213,20 +273,31 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             b_act, b_logp = buf_act.reshape(-1)[mask], buf_logp.reshape(-1)[mask]
             b_adv, b_ret = adv.reshape(-1)[mask], returns.reshape(-1)[mask]
             b_val = buf_val.reshape(-1)[mask]
-            b_feat = buf_feat.reshape(-1, buf_feat.shape[-1])[mask] if twin is not None else None
+            b_feat = buf_feat.reshape(-1, feat_dim)[mask] if aux_head is not None else None
+            b_teach = buf_teach.reshape(-1, 5)[mask] if teacher is not None else None
             size = b_obs.shape[0]
+            # The teacher's weight falls linearly to 0 at teacher_fade × total_steps (env steps, as every schedule).
+            teach_w = recipe.teacher_coef * max(1.0 - env_steps / (recipe.teacher_fade * recipe.total_steps), 0.0)
 
             # --- Optimisation ------------------------------------------------------------------------------------
-            stats = np.zeros(6)  # entropy, approx_kl, clip_frac, value_loss, policy_loss, minibatches
+            # entropy, approx_kl, clip_frac, value_loss, policy_loss, minibatches, aux_loss, teacher_kl
+            stats = np.zeros(8)
+            zero = torch.zeros((), device=device)
             for _ in range(recipe.update_epochs):
                 # Even minibatches (no tiny remainder, whose advantage std would be undefined).
                 for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
-                    if cnn is not None and aux_head is not None and b_feat is not None:
-                        _, logp, entropy, value, h = cnn.act_and_embed(b_obs[idx], b_act[idx])
-                        aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
+                    aux_loss, teacher_kl = zero, zero
+                    if cnn is not None and twin is not None:
+                        logits, value, h = cnn.heads(b_obs[idx])
+                        dist = torch.distributions.Categorical(logits=logits)
+                        logp, entropy = dist.log_prob(b_act[idx]), dist.entropy()
+                        if aux_head is not None and b_feat is not None:
+                            aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
+                        if b_teach is not None:
+                            t_logp = b_teach[idx]
+                            teacher_kl = (t_logp.exp() * (t_logp - dist.logits)).sum(-1).mean()
                     else:
                         _, logp, entropy, value = agent.act(b_obs[idx], b_act[idx])
-                        aux_loss = torch.zeros((), device=device)
                     log_ratio = logp - b_logp[idx]
                     ratio = log_ratio.exp()
                     a = b_adv[idx]
@@ -235,6 +306,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                     v_loss = 0.5 * ((value - b_ret[idx]) ** 2).mean()
                     ent = entropy.mean()
                     loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss + recipe.aux_coef * aux_loss
+                    if teach_w > 0:
+                        loss = loss + teach_w * teacher_kl
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {update}")
                     optimizer.zero_grad()
@@ -245,7 +318,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                         # Schulman's low-variance KL estimator, as CleanRL logs it.
                         kl = ((ratio - 1) - log_ratio).mean()
                         clipped = ((ratio - 1).abs() > recipe.clip_coef).float().mean()
-                    stats += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1]
+                    stats[:6] += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1]
+                    stats[6:] += [aux_loss.item(), teacher_kl.item()]
             update += 1
             var_ret = b_ret.var().item()
             explained = float("nan") if var_ret == 0 else 1 - (b_ret - b_val).var().item() / var_ret
@@ -255,7 +329,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             rets = np.array([r for r, _ in finished])
             lens = np.array([n for _, n in finished])
             ended = sum(ends.values())
-            m = stats[:5] / max(stats[5], 1)
+            m = stats / max(stats[5], 1)
             row = {
                 "env_steps": env_steps,
                 "wall_s": f"{time.monotonic() - start:.1f}",
@@ -275,6 +349,10 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 )
             if ended:
                 row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
+            if aux_head is not None:
+                row["aux_loss"] = f"{m[6]:.5f}"
+            if teacher is not None:
+                row["teacher_kl"] = f"{m[7]:.5f}"
             writer.row(row)
             if update % 50 == 0:
                 save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
@@ -346,6 +424,11 @@ def main(argv: list[str] | None = None) -> int:
         )
     p.add_argument("--no-norm-obs", action="store_true")
     p.add_argument("--no-norm-reward", action="store_true")
+    p.add_argument(
+        "--no-invert-frames",
+        action="store_true",
+        help="CNN recipes: read frames as frame / 255 (chopperscape 0.1.0), not 1 - frame / 255",
+    )
     p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
     a = p.parse_args(args)
     preset = dict(PRESETS[a.preset])
@@ -358,6 +441,7 @@ def main(argv: list[str] | None = None) -> int:
         env_options=options,
         norm_obs=not a.no_norm_obs,
         norm_reward=not a.no_norm_reward,
+        invert_frames=not a.no_invert_frames,
         total_steps=a.steps,
     )
     try:
