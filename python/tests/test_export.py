@@ -38,8 +38,8 @@ def evaluate(*args) -> int:
 
 
 def make_pixel_model(path: pathlib.Path) -> None:
-    """The pixel recipe's CNN, untrained (torch seed 0): what `crates/policy/tests/data/pixels-untrained.onnx` is
-    the export of."""
+    """The pixel recipe's CNN, untrained (torch seed 0), reading plain frames as 0.1.0's models do: what
+    `crates/policy/tests/data/pixels-untrained.onnx` is the export of."""
     import torch
 
     from chopperscape.learn import model
@@ -47,7 +47,7 @@ def make_pixel_model(path: pathlib.Path) -> None:
 
     torch.manual_seed(0)
     shape = (84, 84, 4)
-    recipe = Recipe(**PRESETS["pixels"])
+    recipe = Recipe(**PRESETS["pixels"], invert_frames=False)
     model.save(path, model.build_agent("small", shape, 5), model.ObsNormalizer(shape, False), recipe, shape, 0)
 
 

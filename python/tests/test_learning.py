@@ -146,7 +146,7 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     )
     capsys.readouterr()
     recipe = json.loads((out / "recipe.json").read_text())
-    assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.996
+    assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.998
     assert recipe["env_options"] == {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4, "max_fuel": 300}
     rows = _progress(out / "progress.csv")
     assert rows and all(math.isfinite(float(r[k])) for r in rows for k in ("entropy", "value_loss", "policy_loss"))
@@ -465,7 +465,7 @@ def test_gymnasium_vector_wrappers_on_the_native_batch():
     assert finished > 5
 
 
-def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
+def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys, monkeypatch):
     pytest.importorskip("matplotlib", reason="matplotlib is not installed")
     from chopperscape.learn import plot
 
@@ -481,6 +481,23 @@ def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys):
     bad.write_text("steps,return\n1,2\n")
     assert plot.main([str(bad), "--out", str(tmp_path / "x.png")]) == 2
     assert "missing columns" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+    # --frame-skip: one per CSV; the left panel then counts game frames (env steps × frame skip).
+    import matplotlib.axes
+
+    drawn = []
+    real_plot = matplotlib.axes.Axes.plot
+    monkeypatch.setattr(
+        matplotlib.axes.Axes, "plot", lambda ax, x, *r, **k: drawn.append(list(x)) or real_plot(ax, x, *r, **k)
+    )
+    assert plot.main([str(good), str(good), "--frame-skip", "1", "--frame-skip", "4", "--out", str(out)]) == 0
+    assert drawn == [[0.001, 0.002], [1 / 60, 2 / 60], [0.004, 0.008], [1 / 60, 2 / 60]]
+    for args, message in (
+        (["--frame-skip", "4"], "1 --frame-skip for 2 CSV files"),
+        (["--frame-skip", "0"] * 2, "allowed an integer ≥ 1"),
+    ):
+        with pytest.raises(SystemExit):
+            plot.main([str(good), str(good), *args, "--out", str(tmp_path / "y.png")])
+        assert message in capsys.readouterr().err and not (tmp_path / "y.png").exists()
 
 
 @pytest.mark.parametrize("mode", ["NEXT_STEP", "SAME_STEP"])

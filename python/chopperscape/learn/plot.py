@@ -5,7 +5,8 @@
 
 Each CSV is a progress CSV (:mod:`chopperscape.learn.progress`; the return columns are enough). The left panel plots the
 mean return (last 100 episodes, with ± one std as a band) against env steps, the right one against wall-clock
-minutes. Needs matplotlib.
+minutes. With ``--frame-skip`` (one per CSV), the left panel counts game frames (env steps × frame skip), so that a
+pixel run at frame skip 4 and a features run at 1 share an axis (returns are per frame either way). Needs matplotlib.
 """
 
 from __future__ import annotations
@@ -23,6 +24,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, required=True, help="PNG to write")
     p.add_argument("--label", action="append", default=[], help="one per CSV, in order (default: the folder name)")
     p.add_argument("--hline", action="append", default=[], metavar="NAME=RETURN", help="a reference line")
+    p.add_argument(
+        "--frame-skip",
+        action="append",
+        type=int,
+        default=[],
+        help="one per CSV, in order: the run's frame skip; the left axis then counts game frames",
+    )
     p.add_argument("--title", default="ChopperScape-v0: mean return of the last 100 episodes")
     a = p.parse_args(argv)
     try:
@@ -35,6 +43,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if a.label and len(a.label) != len(a.csv):
         p.error(f"{len(a.label)} --label for {len(a.csv)} CSV files: give one per file or none")
+    if a.frame_skip and len(a.frame_skip) != len(a.csv):
+        p.error(f"{len(a.frame_skip)} --frame-skip for {len(a.csv)} CSV files: give one per file or none")
+    if any(k < 1 for k in a.frame_skip):
+        p.error(f"invalid --frame-skip {min(a.frame_skip)}: allowed an integer ≥ 1")
     try:
         runs = [read(path) for path in a.csv]
     except (OSError, ValueError) as err:
@@ -42,10 +54,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     labels = a.label or [path.parent.name or path.stem for path in a.csv]
     fig, (ax_steps, ax_time) = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
-    for run, label in zip(runs, labels):
+    skips = a.frame_skip or [1] * len(runs)
+    for run, label, skip in zip(runs, labels, skips):
         lo = [m - s for m, s in zip(run["mean_return"], run["std_return"])]
         hi = [m + s for m, s in zip(run["mean_return"], run["std_return"])]
-        steps = [s / 1e6 for s in run["env_steps"]]
+        steps = [s * skip / 1e6 for s in run["env_steps"]]
         minutes = [w / 60 for w in run["wall_s"]]
         for ax, x in ((ax_steps, steps), (ax_time, minutes)):
             (line,) = ax.plot(x, run["mean_return"], label=label)
@@ -63,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
             ha="right",
             color="grey",
         )
-    ax_steps.set_xlabel("env steps (millions)")
+    ax_steps.set_xlabel("game frames (millions; env steps × frame skip)" if a.frame_skip else "env steps (millions)")
     ax_time.set_xlabel("wall-clock minutes (2-core machine)")
     ax_steps.set_ylabel("mean return")
     ax_steps.legend(loc="upper left", fontsize="small")
