@@ -23,6 +23,8 @@ needs_torch = pytest.mark.skipif(
 )
 MODEL = ROOT / "models" / "ppo-features.pt"
 EXPORT = ROOT / "models" / "ppo-features.onnx"
+PIXEL_MODEL = ROOT / "models" / "ppo-pixels.pt"
+PIXEL_EXPORT = ROOT / "models" / "ppo-pixels.onnx"
 
 
 def export(*args) -> int:
@@ -58,11 +60,29 @@ def metadata(path: pathlib.Path) -> dict[str, str]:
 
 
 @needs_torch
-def test_the_committed_export_is_of_the_committed_model():
-    meta = metadata(EXPORT)
+@pytest.mark.parametrize(
+    "model, exported, obs_type, shape, options",
+    [
+        (MODEL, EXPORT, "features", [46], {}),
+        (
+            PIXEL_MODEL,
+            PIXEL_EXPORT,
+            "grayscale",
+            [84, 84, 4],
+            {"frame_skip": 4, "frame_stack": 4, "obs_size": [84, 84]},
+        ),
+    ],
+    ids=["features", "pixels"],
+)
+def test_the_committed_export_is_of_the_committed_model(model, exported, obs_type, shape, options):
+    meta = metadata(exported)
     assert meta["format"] == "chopperscape-policy/1"
-    assert meta["source_sha256"] == hashlib.sha256(MODEL.read_bytes()).hexdigest()
-    assert (meta["obs_type"], json.loads(meta["obs_shape"]), json.loads(meta["env_options"])) == ("features", [46], {})
+    assert meta["source_sha256"] == hashlib.sha256(model.read_bytes()).hexdigest()
+    assert (meta["obs_type"], json.loads(meta["obs_shape"]), json.loads(meta["env_options"])) == (
+        obs_type,
+        shape,
+        options,
+    )
     assert (meta["features_version"], meta["pixels_version"]) == ("2", "2")
 
 
@@ -126,33 +146,39 @@ def test_bad_models_and_outputs_are_one_line_errors(tmp_path, capsys):
     assert "does not exist" in capsys.readouterr().err
 
 
-#: (CLI flags, evaluate --option) of the comparisons: the trained rules truncated early, and birds five times as
-#: often as in training, so that every episode ends by a bird at a different step.
+#: (model, its export, warned, evaluate --option, CLI flags) of the comparisons: the trained rules truncated early,
+#: and birds five times as often as in training, so that every episode ends by a bird at a different step; the
+#: pixel policy (84×84×4 frames drawn in Rust, its CNN run by the Rust loader) on its own rules.
 CASES = [
-    ([], ["max_episode_steps=400"], ["--max-episode-steps", "400"]),
+    (MODEL, EXPORT, [], ["max_episode_steps=400"], ["--max-episode-steps", "400"]),
     (
+        MODEL,
+        EXPORT,
         ["bird_prob"],
         ["bird_prob=0.05", "max_episode_steps=2000"],
         ["--bird-prob", "0.05", "--max-episode-steps", "2000"],
     ),
+    (PIXEL_MODEL, PIXEL_EXPORT, [], ["max_episode_steps=2000"], ["--max-episode-steps", "2000"]),
 ]
 
 
 @needs_torch
-@pytest.mark.parametrize("warned,options,flags", CASES, ids=["trained-rules", "more-birds"])
-def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(warned, options, flags, capsys):
+@pytest.mark.parametrize(
+    "model,exported,warned,options,flags", CASES, ids=["trained-rules", "more-birds", "pixels-trained-rules"]
+)
+def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(model, exported, warned, options, flags, capsys):
     exe = cli()
     if exe is None:
         pytest.skip("cargo is not installed: the comparison with `chopperscape demo --json` is skipped")
     seed, episodes = 11, 6
-    args = [MODEL, "--episodes", episodes, "--seed", seed, "--per-episode"]
+    args = [model, "--episodes", episodes, "--seed", seed, "--per-episode"]
     assert evaluate(*args, *[x for o in options for x in ("--option", o)]) == 0
     expected = json.loads(capsys.readouterr().out)["per_episode"]
     cmd = [
         str(exe),
         "demo",
         "--policy",
-        str(EXPORT),
+        str(exported),
         "--episodes",
         str(episodes),
         "--seed",

@@ -81,6 +81,28 @@ def test_recipe_models_load_with_weights_only(tmp_path, capsys):
 
 
 @needs_torch
+@pytest.mark.parametrize("name", sorted(p.name for p in (ROOT / "models").glob("*.pt")))
+def test_every_committed_model_loads_as_data_and_plays_under_its_own_options(name, capsys):
+    """Each `models/*.pt` (the features policy, the frame-skip-4 teacher, the pixel policy) is tensors and plain
+    data, and `evaluate` plays it with the options it was trained with (frame skip, frame size and stack)."""
+    from chopperscape.learn import model
+
+    loaded = model.load(ROOT / "models" / name)
+    assert evaluate(ROOT / "models" / name, "--episodes", "2", "--option", "max_episode_steps=40") == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["episodes"] == 2 and out["mean_return"] > 0
+    if loaded.recipe["obs_type"] != "features":  # a pixel policy: inverted frames, the teacher only in its recipe
+        assert loaded.recipe["invert_frames"] is True and loaded.agent.actor[0][0].invert is True
+        assert set(torch_payload(ROOT / "models" / name)) == set(torch_payload(ROOT / "models" / "ppo-features.pt"))
+
+
+def torch_payload(path):
+    import torch
+
+    return torch.load(path, map_location="cpu", weights_only=True)
+
+
+@needs_torch
 def test_a_model_whose_input_does_not_fit_the_options_is_a_clear_error(tmp_path, capsys):
     from chopperscape.learn import model
     from chopperscape.learn.recipe import Recipe

@@ -54,6 +54,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     labels = a.label or [path.parent.name or path.stem for path in a.csv]
     fig, (ax_steps, ax_time) = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    if len(runs) > 10:  # past the default cycle's 10 colours: tab20's, its 10 strong ones first
+        tab20 = plt.get_cmap("tab20")
+        colours = [tab20(i) for i in range(20)]
+        for ax in (ax_steps, ax_time):
+            ax.set_prop_cycle(color=list(colours[0::2]) + list(colours[1::2]))
     skips = a.frame_skip or [1] * len(runs)
     for run, label, skip in zip(runs, labels, skips):
         lo = [m - s for m, s in zip(run["mean_return"], run["std_return"])]
