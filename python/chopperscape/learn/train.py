@@ -23,6 +23,8 @@ checked before anything is written; a loss that is not finite stops the run befo
 model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
 reached so far atomically, and exits with 130, 143, 129.
 ``--seeds 0-9`` trains several seeds and reports them as the field does (see :mod:`chopperscape.learn.seeds`).
+Pixel recipes learn here with a features teacher: ``--preset pixels --teacher models/ppo-features-fs4.pt`` (see
+:class:`chopperscape.learn.recipe.Recipe`, ``teacher``, and ``docs/learning.md``).
 """
 
 from __future__ import annotations
