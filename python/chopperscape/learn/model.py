@@ -87,13 +87,18 @@ class ActorCritic(nn.Module):
     def value(self, x: torch.Tensor) -> torch.Tensor:
         return self.critic(x).squeeze(-1)
 
+    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """`(logits, value, embedding)`: the embedding is what both heads read where they share a trunk (a CNN's),
+        for auxiliary losses on it; None for separate networks."""
+        return self.actor(x), self.value(x), None
+
     def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
         """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
-        logits = self.actor(x)
+        logits, value, _ = self.heads(x)
         dist = torch.distributions.Categorical(logits=logits)
         if action is None:
             action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), self.value(x)
+        return action, dist.log_prob(action), dist.entropy(), value
 
 
 class Agent(ActorCritic):
@@ -182,22 +187,10 @@ class CnnAgent(ActorCritic):
         self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
         self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
 
-    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
-        """As :meth:`ActorCritic.act`, with the shared trunk run once for both heads (`actor(x)` and `critic(x)`
-        each run it: twice the convolutions, forward and backward, for the same numbers)."""
-        return self.act_and_embed(x, action)[:4]
-
-    def act_and_embed(self, x: torch.Tensor, action: torch.Tensor | None = None):
-        """:meth:`act`'s four results and the trunk's output (the embedding both heads read), for auxiliary
-        losses on the trunk."""
-        logits, value, h = self.heads(x)
-        dist = torch.distributions.Categorical(logits=logits)
-        if action is None:
-            action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), value, h
-
-    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """`(logits, value, embedding)` from one pass of the trunk."""
+    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """`(logits, value, embedding)` from one pass of the shared trunk (`actor(x)` and `critic(x)` each run it:
+        twice the convolutions, forward and backward, for the same numbers), so :meth:`ActorCritic.act` runs it
+        once."""
         actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
         h = actor[0](x)
         return actor[1](h), critic[1](h).squeeze(-1), h

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _signals
+from .. import _core, _signals
 from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
@@ -72,7 +72,6 @@ CSV_COLUMNS = list(progress.COLUMNS)
 def _rules(options: dict) -> dict:
     """The rules options among env `options`, as comparable values (numbers as floats), those equal to their default
     left out: `{}`, `{"frame_skip": 1}` and `{"alien_prob": 0.0}` are the same rules."""
-    from .. import _core
 
     def value(v: object) -> object:
         try:
@@ -288,18 +287,15 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             for _ in range(recipe.update_epochs):
                 # Even minibatches (no tiny remainder, whose advantage std would be undefined).
                 for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
+                    logits, value, h = agent.heads(b_obs[idx])
+                    dist = torch.distributions.Categorical(logits=logits)
+                    logp, entropy = dist.log_prob(b_act[idx]), dist.entropy()
                     aux_loss, teacher_kl = zero, zero
-                    if cnn is not None and twin is not None:
-                        logits, value, h = cnn.heads(b_obs[idx])
-                        dist = torch.distributions.Categorical(logits=logits)
-                        logp, entropy = dist.log_prob(b_act[idx]), dist.entropy()
-                        if aux_head is not None and b_feat is not None:
-                            aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
-                        if b_teach is not None:
-                            t_logp = b_teach[idx]
-                            teacher_kl = (t_logp.exp() * (t_logp - dist.logits)).sum(-1).mean()
-                    else:
-                        _, logp, entropy, value = agent.act(b_obs[idx], b_act[idx])
+                    if aux_head is not None and b_feat is not None and h is not None:
+                        aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
+                    if b_teach is not None:
+                        t_logp = b_teach[idx]
+                        teacher_kl = (t_logp.exp() * (t_logp - dist.logits)).sum(-1).mean()
                     log_ratio = logp - b_logp[idx]
                     ratio = log_ratio.exp()
                     a = b_adv[idx]
