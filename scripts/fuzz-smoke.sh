@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$ROOT/fuzz"
 
 if ! cargo +nightly --version >/dev/null 2>&1; then
-  say "skipped: the fuzz smoke run (no nightly toolchain: rustup toolchain install nightly)"
+  skip "the fuzz smoke run (no nightly toolchain: rustup toolchain install nightly)"
   exit 0
 fi
 host=$(rustc +nightly -vV | sed -n 's/^host: //p')

@@ -9,7 +9,7 @@ cd "$ROOT"
 # Debian packages the command-line tests need: ffmpeg (.mp4 recording, ffprobe), and for `play` under a virtual
 # display: Xvfb (xvfb-run), xdotool and the X11 libraries minifb loads at run time.
 cli_test_deps() {
-  apt_install ffmpeg || true
+  apt_install ffmpeg || skip "the .mp4 checks against ffmpeg (ffmpeg could not be installed)"
   apt_install xvfb xauth xdotool libx11-6 libxcursor1 libxrandr2 libxi6 libxkbcommon0
 }
 
@@ -59,8 +59,12 @@ PY
   echo "play under Xvfb: ok (held Up moved the chopper; the saved actions replay to the same result)"
 }
 
+if [ "${1:-}" = --install-only ]; then  # the installs and nothing else (scripts/test-all.sh runs them early)
+  cli_test_deps || true
+  exit 0
+fi
 if cli_test_deps; then
   play_under_xvfb
 else
-  say "skipped: the window test of \`chopperscape play\` (Xvfb, xdotool or the X11 libraries could not be installed)"
+  skip "the window test of \`chopperscape play\` (Xvfb, xdotool or the X11 libraries could not be installed)"
 fi

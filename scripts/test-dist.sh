@@ -1,65 +1,87 @@
 #!/usr/bin/env bash
-# The distributions and the documentation site, as a user gets them:
-#   1. scripts/build-dist.sh: the manylinux2014 abi3 wheels and chopperscape-cli wheels (x86_64, aarch64), the
-#      sdist, in dist/;
-#   2. `twine check` on every file;
-#   3. `auditwheel show` agrees with each wheel's manylinux_2_17 tag, and no ELF file in a wheel needs a glibc
-#      symbol newer than GLIBC_2.17 (fails as soon as one creeps in), for both architectures;
-#   4. both wheels installed into a fresh venv with no Rust toolchain on PATH: scripts/dist/smoke_test.py (make,
-#      step, check_env, the vector env, built-in policies, the `chopperscape` command) under pytest, run outside the repository,
-#      with python3 and with CPython 3.9 and 3.13 where installed (the abi3 wheel's oldest and newest claimed);
-#   5. the sdist unpacked into target/dist-sdist/src and installed by pip into a fresh venv, with pip's isolated
-#      build (maturin from PyPI; cargo builds into target/dist-sdist/target, so a second run rebuilds only what
-#      changed), then imported and stepped;
-#   6. the documentation site (docs/site, Sphinx + MyST) built with warnings as errors into docs/site/_build, in
-#      .venv-docs with both wheels installed, the rustdoc of the core crates beside it.
-# Needs python3 with venv, PyPI and rustup (for aarch64); says what it skipped and why where it cannot.
-# Idempotent; quiet on success but for pytest's summary and one "N passed" line for the other checks.
+# The distributions and the documentation site, as a user gets them. Every test run (scripts/test-all.sh):
+#   1. scripts/build-dist.sh wheel: the x86_64 manylinux2014 abi3 wheel (the same file the Python tests installed)
+#      and the sdist, in dist/;
+#   2. `twine check` on both;
+#   3. `auditwheel show` agrees with the wheel's manylinux_2_17 tag, and no ELF file in it needs a glibc symbol
+#      newer than GLIBC_2.17 (fails as soon as one creeps in);
+#   4. the wheel installed into a fresh venv with no Rust toolchain on PATH: scripts/dist/smoke_test.py (make, step,
+#      check_env, the vector env, built-in policies) under pytest, run outside the repository, with python3;
+#   5. the documentation site (docs/site, Sphinx + MyST) built with warnings as errors into docs/site/_build, in
+#      .venv-docs with the wheel installed (the CLI page from the workspace's debug `chopperscape`), the rustdoc of
+#      the core crates beside it.
+# `test-dist.sh release` (scripts/release-check.sh, before a version is tagged) checks everything a release ships:
+# the aarch64 and CLI wheels too (steps 1-3 for each), the smoke test with `chopperscape[cli]` and with CPython 3.9
+# and 3.13 where installed (the abi3 wheel's oldest and newest claimed), and the sdist built by pip into a fresh
+# venv with pip's isolated build (maturin from PyPI; cargo builds into target/dist-sdist/target), then imported.
+# Needs python3 with venv, PyPI and rustup (for aarch64). Under CI=true a check that cannot run fails the run; a
+# local run says what it skipped and why. Idempotent; quiet on success but for pytest's summary and one
+# "N passed" line for the other checks.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 cd "$ROOT"
 
+case "${1:-ci}" in
+  ci | --install-only) release=0 ;;
+  release) release=1 ;;
+  *) say "test-dist.sh: unknown mode '$1' (allowed: ci, release, --install-only)"; exit 2 ;;
+esac
+
 if ! command -v python3 >/dev/null 2>&1; then
-  say "skipped: the distribution tests (python3 is not installed)"
+  skip "the distribution tests (python3 is not installed)"
   exit 0
 fi
 python3 -m venv --help >/dev/null 2>&1 || apt_install python3-venv \
-  || { say "skipped: the distribution tests (python3 -m venv does not work)"; exit 0; }
-command -v readelf >/dev/null 2>&1 || apt_install binutils || true
+  || { skip "the distribution tests (python3 -m venv does not work)"; exit 0; }
+command -v readelf >/dev/null 2>&1 || apt_install binutils || skip "the glibc check (readelf: binutils could not be installed)"
 
 PIP=(-m pip install --disable-pip-version-check -q)
+# The tools: .venv-dist (maturin, ziglang, twine, auditwheel) and .venv-docs (Sphinx, MyST, furo), pinned.
+bash scripts/build-dist.sh --install-only || skip "the distribution tests (maturin and ziglang could not be installed)"
+DPY=.venv-docs/bin/python
+docs=1
+[ -x "$DPY" ] || quiet python3 -m venv .venv-docs
+if ! "$DPY" -c 'import sphinx, myst_parser, furo' >/dev/null 2>&1 && ! pip_install "$DPY" sphinx myst-parser furo; then
+  skip "the documentation site (sphinx, myst-parser and furo could not be installed from PyPI)"
+  docs=0
+fi
+# `test-dist.sh --install-only`: the installs above and nothing else (scripts/test-all.sh runs them early).
+[ "${1:-}" = --install-only ] && exit 0
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 checks=0
 
-# 1. Build. Without PyPI (maturin, ziglang) nothing below can run.
-if ! build_out=$(bash scripts/build-dist.sh 2>&1); then
+# 1. Build (a no-op where the Python tests already built this version's wheel). Without PyPI (maturin, ziglang)
+# nothing below can run.
+if [ "$release" = 1 ]; then set_name=all; else set_name=wheel; fi
+if ! build_out=$(bash scripts/build-dist.sh "$set_name" 2>&1); then
+  say "$build_out"
   if [ ! -x .venv-dist/bin/maturin ] || ! .venv-dist/bin/python -c 'import ziglang' 2>/dev/null; then
-    say "skipped: the distribution tests (maturin and ziglang could not be installed from PyPI):"
-    say "$build_out"
+    skip "the distribution tests (maturin and ziglang could not be installed from PyPI)"
     exit 0
   fi
-  say "$build_out"
   exit 1
 fi
 grep '^skipped:' <<<"$build_out" >&2 || true
-version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -1)
-tag=manylinux2014_x86_64.manylinux_2_17_x86_64
-wheel=dist/chopperscape-$version-cp39-abi3-$tag.whl
-cli_wheel=dist/chopperscape_cli-$version-py3-none-$tag.whl
+version=$(project_version)
+wheel=$(dist_wheel)
 sdist=dist/chopperscape-$version.tar.gz
-for f in "$wheel" "$cli_wheel" "$sdist"; do
+wheels=("$wheel")
+cli_wheel=
+if [ "$release" = 1 ]; then
+  wheels=(dist/*-"$version"-*.whl)
+  cli_wheel=dist/chopperscape_cli-$version-py3-none-manylinux2014_x86_64.manylinux_2_17_x86_64.whl
+  [ -f "$cli_wheel" ] || { say "FAILED: scripts/build-dist.sh did not write $cli_wheel"; exit 1; }
+fi
+for f in "$wheel" "$sdist"; do
   [ -f "$f" ] || { say "FAILED: scripts/build-dist.sh did not write $f; it wrote:"; ls dist >&2; exit 1; }
 done
-wheels=(dist/*-"$version"-*.whl)
 
 # 2. Metadata, as PyPI would check it.
-.venv-dist/bin/python -c 'import twine, auditwheel' 2>/dev/null \
-  || quiet .venv-dist/bin/python "${PIP[@]}" "twine>=6,<8" "auditwheel>=6,<7"
 quiet .venv-dist/bin/twine check --strict "${wheels[@]}" "$sdist"
 checks=$((checks + 1))
 
-# 3. The platform tag of every wheel (x86_64 and aarch64): auditwheel's verdict, and the newest glibc symbol
+# 3. The platform tag of every wheel (x86_64; aarch64 too in a release check): auditwheel's verdict, and the newest glibc symbol
 # version any ELF file in it needs.
 glibc_floor=2.17
 for whl in "${wheels[@]}"; do
@@ -91,12 +113,13 @@ for whl in "${wheels[@]}"; do
   [ "$found" -gt 0 ] || { say "FAILED: no ELF file in $whl"; exit 1; }
   checks=$((checks + 1))
 done
-if ls dist/*-"$version"-*aarch64.whl >/dev/null 2>&1 && [ "$(uname -m)" != aarch64 ]; then
-  say "skipped: running the aarch64 wheels (this machine is $(uname -m); their tags and glibc are checked above)"
+if [ "$release" = 1 ] && [ "$(uname -m)" != aarch64 ]; then
+  say "not run: the aarch64 wheels (this machine is $(uname -m); their tags and glibc are checked above)"
 fi
 
-# 4. The wheels in a fresh venv, no cargo or rustc on PATH, run from outside the repository: with python3, and with
-# the oldest and newest CPython the wheel claims (3.9, 3.13) where they are installed (pyenv's too).
+# 4. The wheel in a fresh venv, no cargo or rustc on PATH, run from outside the repository: with python3; in a
+# release check as `chopperscape[cli]` (the CLI wheel too) and with the oldest and newest CPython the wheel claims
+# (3.9, 3.13) where they are installed (pyenv's too).
 find_python() {  # find_python 3.9: a working interpreter of that version, or nothing
   local v=$1 exe
   for exe in "python$v" "$(pyenv root 2>/dev/null)"/versions/"$v".*/bin/python; do
@@ -109,16 +132,21 @@ find_python() {  # find_python 3.9: a working interpreter of that version, or no
 }
 cp scripts/dist/smoke_test.py "$work/"
 smoke() {  # smoke PYTHON: the smoke test in a fresh venv of that interpreter
-  local py=$1 venv log clean_path tool
+  local py=$1 venv log clean_path tool requirement select=()
   venv="$work/wheel-venv-$(basename "$py")"
   quiet "$py" -m venv "$venv"
-  # The package's dependencies from PyPI, then the package as a user names it, `chopperscape[cli]`, from dist/
-  # alone: the `cli` extra must resolve to this version's chopperscape-cli wheel.
-  if ! quiet "$venv/bin/python" "${PIP[@]}" "gymnasium>=1.1,<2" "numpy>=1.21,<3" "pytest>=7"; then
-    say "skipped: the wheel smoke test with $py (gymnasium, numpy, pytest could not be installed from PyPI)"
-    return 0
+  # The package's dependencies from PyPI (the pinned versions), then the package as a user names it from dist/
+  # alone; in a release check `chopperscape[cli]`: the `cli` extra must resolve to this version's CLI wheel.
+  pip_install "$venv/bin/python" gymnasium numpy pytest \
+    || skip "the wheel smoke test with $py (gymnasium, numpy, pytest could not be installed from PyPI)"
+  requirement="chopperscape==$version"
+  if [ "$release" = 1 ]; then
+    requirement="chopperscape[cli]==$version"
+  else
+    # The CLI wheel is a release check's (scripts/release-check.sh).
+    select=(--deselect smoke_test.py::test_the_cli_wheel_matches_the_package)
   fi
-  quiet "$venv/bin/python" "${PIP[@]}" --no-index --find-links dist "chopperscape[cli]==$version"
+  quiet "$venv/bin/python" "${PIP[@]}" --no-index --find-links dist "$requirement"
   clean_path="$venv/bin:/usr/local/bin:/usr/bin:/bin"
   for tool in cargo rustc; do
     if PATH=$clean_path command -v "$tool" >/dev/null 2>&1; then
@@ -128,7 +156,7 @@ smoke() {  # smoke PYTHON: the smoke test in a fresh venv of that interpreter
   done
   log="$work/smoke.log"
   if (cd "$work" && env -i HOME="$HOME" PATH="$clean_path" LANG=C.UTF-8 "$venv/bin/python" -m pytest -q \
-    -p no:cacheprovider -W error smoke_test.py >"$log" 2>&1); then
+    -p no:cacheprovider -W error "${select[@]}" smoke_test.py >"$log" 2>&1); then
     grep -E '^[0-9]+ passed' "$log" || tail -1 "$log"
   else
     say "FAILED: the wheel smoke test with $py:"
@@ -137,16 +165,42 @@ smoke() {  # smoke PYTHON: the smoke test in a fresh venv of that interpreter
   fi
 }
 smoke "$(command -v python3)"
-for v in 3.9 3.13; do
-  py=$(find_python "$v")
-  if [ -n "$py" ]; then smoke "$py"; else say "skipped: the wheel smoke test with Python $v (not installed)"; fi
-done
+if [ "$release" = 1 ]; then
+  for v in 3.9 3.13; do
+    py=$(find_python "$v")
+    if [ -n "$py" ]; then smoke "$py"; else skip "the wheel smoke test with Python $v (not installed)"; fi
+  done
+fi
 
-# 5. The sdist, built from its own files only. Its tree is kept at a fixed path and updated file by file (files
-# that did not change keep their times), so cargo rebuilds only what changed since the last run.
-sdist_dir=target/dist-sdist
-mkdir -p "$sdist_dir"
-python3 - "$sdist" "$sdist_dir/src" <<'PY'
+# 5. The documentation site, -W: every warning is an error. The CLI page is the workspace's `chopperscape --help`
+# (a debug build: the text is the same; the release check installs the CLI wheel instead).
+if [ "$docs" = 0 ]; then
+  :  # skipped above
+elif ! quiet "$DPY" "${PIP[@]}" --force-reinstall --no-deps "$wheel" $cli_wheel \
+  || ! pip_install "$DPY" "$wheel"; then
+  skip "the documentation site (the wheel's dependencies could not be installed from PyPI)"
+else
+  cli_exe=$ROOT/.venv-docs/bin/chopperscape
+  if [ "$release" = 0 ]; then
+    quiet cargo build -q -p chopperscape-cli
+    cli_exe=$ROOT/target/debug/chopperscape
+  fi
+  # rustdoc as strict as sphinx -W: a broken or private intra-doc link fails here.
+  RUSTDOCFLAGS="-D warnings" quiet nice -n 10 cargo doc --no-deps -q -p chopperscape-core -p chopperscape-vector \
+    -p chopperscape-actionlog
+  rm -rf docs/site/_build/html
+  CHOPPERSCAPE_CLI=$cli_exe quiet "$DPY" -m sphinx -W --keep-going -q -b html docs/site docs/site/_build/html
+  [ -f docs/site/_build/html/rustdoc/chopperscape/index.html ] \
+    || { say "FAILED: the rustdoc is not in the site"; exit 1; }
+  checks=$((checks + 1))
+fi
+
+# 6. A release check only: the sdist, built from its own files only. Its tree is kept at a fixed path and updated
+# file by file (files that did not change keep their times), so cargo rebuilds only what changed since the last run.
+if [ "$release" = 1 ]; then
+  sdist_dir=target/dist-sdist
+  mkdir -p "$sdist_dir"
+  python3 - "$sdist" "$sdist_dir/src" <<'PY'
 import filecmp, os, pathlib, shutil, sys, tarfile, tempfile
 archive, dest = sys.argv[1], pathlib.Path(sys.argv[2])
 with tempfile.TemporaryDirectory() as tmp:
@@ -164,12 +218,10 @@ with tempfile.TemporaryDirectory() as tmp:
             shutil.copyfile(src, dst)
             shutil.copymode(src, dst)
 PY
-python3 -m venv "$work/sdist-venv"
-if ! command -v cargo >/dev/null 2>&1; then
-  say "skipped: the sdist build (no cargo on PATH; the sdist needs a Rust toolchain)"
-elif ! quiet "$work/sdist-venv/bin/python" "${PIP[@]}" "gymnasium>=1.1,<2" "numpy>=1.21,<3"; then
-  say "skipped: the sdist build (gymnasium and numpy could not be installed from PyPI)"
-else
+  python3 -m venv "$work/sdist-venv"
+  command -v cargo >/dev/null 2>&1 || skip "the sdist build (no cargo on PATH; the sdist needs a Rust toolchain)"
+  pip_install "$work/sdist-venv/bin/python" gymnasium numpy \
+    || skip "the sdist build (gymnasium and numpy could not be installed from PyPI)"
   # As a user's pip does it: an isolated build environment with the sdist's build-system.requires (maturin).
   CARGO_TARGET_DIR="$ROOT/$sdist_dir/target" quiet nice -n 10 "$work/sdist-venv/bin/python" "${PIP[@]}" \
     "$sdist_dir/src"
@@ -182,24 +234,4 @@ assert chopperscape.__version__ == sys.argv[1], chopperscape.__version__
   checks=$((checks + 1))
 fi
 
-# 6. The documentation site, -W: every warning is an error.
-DPY=.venv-docs/bin/python
-DOCS_SPEC=("sphinx>=8,<10" "myst-parser>=4,<6" "furo>=2024.8")
-[ -x "$DPY" ] || quiet python3 -m venv .venv-docs
-if ! "$DPY" -c 'import sphinx, myst_parser, furo' >/dev/null 2>&1 && ! quiet "$DPY" "${PIP[@]}" "${DOCS_SPEC[@]}"; then
-  say "skipped: the documentation site (sphinx, myst-parser and furo could not be installed from PyPI)"
-elif ! quiet "$DPY" "${PIP[@]}" --force-reinstall --no-deps "$wheel" "$cli_wheel" \
-  || ! quiet "$DPY" "${PIP[@]}" "$wheel"; then
-  say "skipped: the documentation site (the wheel's dependencies could not be installed from PyPI)"
-else
-  # rustdoc as strict as sphinx -W: a broken or private intra-doc link fails here.
-  RUSTDOCFLAGS="-D warnings" quiet nice -n 10 cargo doc --no-deps -q -p chopperscape-core -p chopperscape-vector \
-    -p chopperscape-actionlog
-  rm -rf docs/site/_build/html
-  quiet "$DPY" -m sphinx -W --keep-going -q -b html docs/site docs/site/_build/html
-  [ -f docs/site/_build/html/rustdoc/chopperscape/index.html ] \
-    || { say "FAILED: the rustdoc is not in the site"; exit 1; }
-  checks=$((checks + 1))
-fi
-
-echo "$checks passed, 0 failed (dist: twine, auditwheel and glibc per wheel, sdist, docs)"
+echo "$checks passed, 0 failed (dist: twine, auditwheel and glibc per wheel, docs$([ "$release" = 1 ] && echo ', sdist'))"
