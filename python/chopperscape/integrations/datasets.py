@@ -398,7 +398,6 @@ def collect(
     episodes: int = 1,
     seed: int = 0,
     *,
-    pilot: str | None = None,
     max_episode_steps: int | None = 10_000,
     chunk_steps: int = 1000,
     progress: bool | None = None,
@@ -410,13 +409,7 @@ def collect(
     dataset `dataset_id` (`"namespace/name-vN"`) and returns it (`minari.MinariDataset`). `options` are the env's
     keyword options (`obs_type="grayscale"`, `obs_size=(84, 84)`, `frame_skip=4`, ...; `obs_type` defaults to
     `"features"`). Episode `i` starts from `reset(seed=seed + i)` with the policy restarted with that seed, as
-    `chopperscape demo` plays them. `max_episode_steps=None`: no time limit. (`pilot=`, 0.1's name of `policy`,
-    still works and warns; it goes away in 0.3.0.)"""
-    if pilot is not None:
-        warnings.warn(
-            "collect(pilot=...) is now collect(policy=...) (pilot= goes away in 0.3.0)", FutureWarning, stacklevel=2
-        )
-        policy = pilot
+    `chopperscape demo` plays them. `max_episode_steps=None`: no time limit."""
     policies._check_name(policy)
     seed = policies._check_seed(seed)
     episodes = positive_int("episodes", episodes)
