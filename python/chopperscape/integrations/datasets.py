@@ -47,7 +47,6 @@ import shutil
 import sys
 import tempfile
 import time
-import warnings
 from collections.abc import Iterable, Iterator
 from typing import Any, Callable
 
