@@ -1,13 +1,16 @@
-"""Throughput of the PPO recipe's whole training loop, per network and frame size (a benchmark, not a test).
+"""Where the PPO recipe's training time goes, phase by phase, beside each phase's floor (a benchmark, not a test).
 
-    .venv/bin/python python/bench_train.py [--steps 8192] [--case small-84 ...] [--device cpu]
+    .venv/bin/python python/bench_train.py [--steps 131072] [--case features ...] [--device cpu] [--smoke]
 
-For each case it runs ``chopperscape.learn.train`` (the pixel preset's settings: 32 envs × 128 steps, 4 epochs of 4
-minibatches, frame skip 4, 4 stacked frames; the features case uses the features recipe) for ``--steps`` env steps
-and prints env steps (decisions) per second of wall time and per CPU second of this process, and where the CPU time
-goes: the env alone (rendering included), the network's forward passes in the rollout, and one optimisation epoch's
-forward + backward + Adam, each timed on its own. On a shared machine the CPU-second figure is the steadier one; with
-one torch thread it estimates one idle core.
+For each case it trains with the case's preset (``features``: the features recipe; ``fast``: ``--preset fast``;
+``pixels``: ``--preset pixels``, a small CNN on 84×84×4 frames) for ``--steps`` env steps, timing every phase of the
+loop (:mod:`chopperscape.learn.phases`: env, observation normalisation, rollout forward, bookkeeping, GAE, update,
+logging), and prints per phase the wall time per env step and its share, beside the phase's floor: the same work
+with no Python in between (the env stepping the whole batch natively; one forward of the network over a whole
+rollout at once; each minibatch's forward + backward + Adam run back to back, times the epochs). The gap between a
+phase and its floor is what the loop's Python costs. On a shared machine, compare cases from one run only.
+``--smoke`` runs each case for a few updates of a tiny batch (seconds: the test command runs it so that it cannot
+rot; its figures mean nothing).
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import platform
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 # This file sits beside the package's sources, which lack the compiled `_core`: import the installed package.
@@ -28,84 +32,91 @@ import torch  # noqa: E402
 
 from chopperscape import VectorEnv  # noqa: E402
 from chopperscape.learn import model, train  # noqa: E402
+from chopperscape.learn.phases import PHASES, Phases  # noqa: E402
 from chopperscape.learn.recipe import PRESETS, Recipe, network_of  # noqa: E402
 
-PIXELS = PRESETS["pixels"]
-CASES = {
-    "features-mlp": dict(obs_type="features", network="mlp", env_options={}),
-    "nature-84": dict(network="nature", env_options={**PIXELS["env_options"], "obs_size": [84, 84]}),
-    "small-84": dict(network="small", env_options={**PIXELS["env_options"], "obs_size": [84, 84]}),
-    "small-42": dict(network="small", env_options={**PIXELS["env_options"], "obs_size": [42, 42]}),
-}
+CASES = [name for name in ("features", "fast", "pixels") if name in PRESETS]
 
 
-def recipe_for(case: str, steps: int, device: str) -> Recipe:
-    settings = {k: v for k, v in PIXELS.items() if k != "env_options"} if case != "features-mlp" else {}
-    return Recipe(**{**settings, **CASES[case]}, total_steps=steps, device=device)
+def recipe_for(case: str, steps: int, device: str, smoke: bool) -> Recipe:
+    r = Recipe(**PRESETS[case], total_steps=steps, device=device)
+    if smoke:
+        r = replace(r, num_envs=8, num_steps=16, num_minibatches=2, update_epochs=2)
+    return r
 
 
-def parts(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
-    """CPU seconds per env step of the loop's parts, each measured alone."""
-    n = recipe.num_envs
-    envs = VectorEnv(n, num_threads=1, obs_type=recipe.obs_type, **recipe.env_options)
+def floors(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
+    """Wall seconds per env step of each phase's floor, each measured alone."""
+    n, t_len = recipe.num_envs, recipe.num_steps
+    envs = VectorEnv(n, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options)
     obs, _ = envs.reset(seed=0)
     actions = np.zeros(n, np.int64)
-    t = time.process_time()
+    t = time.perf_counter()
     for _ in range(repeats * 20):
         obs, *_ = envs.step(actions)
-    env = (time.process_time() - t) / (repeats * 20 * n)
-    shape = tuple(envs.single_observation_space.shape)
-    agent = model.build_agent(network_of(recipe), shape, invert_frames=recipe.invert_frames).to(recipe.device)
+    env = (time.perf_counter() - t) / (repeats * 20 * n)
+    shape = tuple(envs.single_observation_space.shape or ())
     envs.close()
-    x = torch.from_numpy(np.ascontiguousarray(obs)).to(recipe.device)
-    if recipe.obs_type == "features":
-        x = x.float()
-    with torch.no_grad():
-        agent.act(x)
-        t = time.process_time()
-        for _ in range(repeats * 10):
-            agent.act(x)
-        forward = (time.process_time() - t) / (repeats * 10 * n)
-    batch = n * recipe.num_steps // recipe.num_minibatches
-    xb = x[torch.randint(0, n, (batch,))]
-    opt = torch.optim.Adam(agent.parameters(), lr=1e-4)
-    t = time.process_time()
+    pixels = network_of(recipe) != "mlp"
+    agent = model.build_agent(network_of(recipe), shape, 5, recipe.hidden, recipe.invert_frames).to(recipe.device)
+    batch = np.repeat(obs[None], t_len, axis=0).reshape(n * t_len, *shape)
+    norm = model.ObsNormalizer(shape, recipe.norm_obs and not pixels)
+    t = time.perf_counter()
     for _ in range(repeats):
-        _, logp, ent, value = agent.act(xb, torch.zeros(batch, dtype=torch.long, device=recipe.device))
+        x = torch.from_numpy(batch if pixels else norm(batch, update=True)).to(recipe.device)
+    obs_norm = (time.perf_counter() - t) / (repeats * n * t_len)
+    with torch.inference_mode():
+        agent.act(x)
+        t = time.perf_counter()
+        for _ in range(repeats):
+            agent.act(x)
+        forward = (time.perf_counter() - t) / (repeats * n * t_len)
+    size = n * t_len // recipe.num_minibatches
+    xb, ab = x[:size].clone(), torch.zeros(size, dtype=torch.long, device=recipe.device)
+    opt = torch.optim.Adam(agent.parameters(), lr=1e-5)
+    t = time.perf_counter()
+    for _ in range(repeats):
+        _, logp, ent, value = agent.act(xb, ab)
         loss = -logp.mean() - 0.01 * ent.mean() + value.pow(2).mean()
         opt.zero_grad()
         loss.backward()
         opt.step()
-    per_sample = (time.process_time() - t) / (repeats * batch)
-    return {"env": env, "forward": forward, "update": per_sample * recipe.update_epochs}
+    update = (time.perf_counter() - t) / (repeats * size) * recipe.update_epochs
+    return {"env": env, "obs_norm": obs_norm, "forward": forward, "update": update}
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--steps", type=int, default=8192, help="env steps per case (default 8192)")
-    p.add_argument("--case", action="append", choices=sorted(CASES), help="cases to run (default all)")
+    p.add_argument("--steps", type=int, default=131_072, help="env steps per case (default 131072)")
+    p.add_argument("--case", action="append", choices=CASES, help="cases to run (default all)")
     p.add_argument("--device", default="cpu", help="cpu or cuda")
-    a = p.parse_args()
-    torch.set_num_threads(1)
+    p.add_argument("--smoke", action="store_true", help="a few tiny updates per case (seconds; for the tests)")
+    a = p.parse_args(argv)
+    steps = 256 if a.smoke else a.steps
     print(
         f"# {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, device {a.device}, "
-        f"load average {os.getloadavg()[0]:.1f}"
+        f"load average {os.getloadavg()[0]:.1f}; µs of wall time per env step"
     )
-    print(f"{'case':<14} {'steps/s wall':>12} {'steps/s CPU':>12} {'env µs':>8} {'forward µs':>10} {'update µs':>10}")
-    for case in a.case or list(CASES):
-        recipe = recipe_for(case, a.steps, a.device)
+    for case in a.case or CASES:
+        recipe = recipe_for(case, steps, a.device, a.smoke)
+        torch.set_num_threads(recipe.torch_threads)
+        phases = Phases()
         with tempfile.TemporaryDirectory() as out:
-            wall, cpu = time.perf_counter(), time.process_time()
-            train.train(recipe, Path(out))
-            wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-            last = (Path(out) / "progress.csv").read_text().splitlines()[-1]
-        steps = int(last.split(",")[0])
-        split = parts(recipe)
-        print(
-            f"{case:<14} {steps / wall:>12,.0f} {steps / cpu:>12,.0f} {split['env'] * 1e6:>8.1f} "
-            f"{split['forward'] * 1e6:>10.1f} {split['update'] * 1e6:>10.1f}"
-        )
+            wall = time.perf_counter()
+            train.train(recipe, Path(out), phases=phases)
+            wall = time.perf_counter() - wall
+        done = max(phases.steps, 1)
+        floor = floors(recipe)
+        print(f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s")
+        print(f"{'phase':<12} {'µs/step':>9} {'share':>7} {'floor µs':>9}")
+        for name in PHASES:
+            sec = phases.seconds[name]
+            f = f"{floor[name] * 1e6:9.2f}" if name in floor else f"{'–':>9}"
+            print(f"{name:<12} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}")
+        other = wall - sum(phases.seconds.values())
+        print(f"{'(setup)':<12} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -45,6 +45,7 @@ from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
 from .model import CnnAgent, Model, ObsNormalizer, RunningMeanStd, build_agent, load, save
+from .phases import OFF, Phases
 from .recipe import (
     DEFAULT_STEPS,
     PRESETS,
@@ -104,10 +105,12 @@ def load_teacher(recipe: Recipe) -> Model:
     return teacher
 
 
-def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False) -> Path:
+def train(
+    recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False, phases: Phases = OFF
+) -> Path:
     """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
-    model path. `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before
+    model path. `phases` (a :class:`~chopperscape.learn.phases.Phases`) collects where the wall time went. `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before
     anything is written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
     out = Path(out)
     check_recipe(recipe)
@@ -200,6 +203,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     writer = progress.Writer(csv_path)
     update = 0
     stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
+    phases.start()
     try:
         while env_steps < recipe.total_steps:
             if stop.pending is not None:
@@ -218,10 +222,13 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 valid = ~next_done
                 with torch.no_grad():
                     action, logp, _, value = agent.act(next_obs)
+                phases.lap("forward")
                 buf_obs[t], buf_act[t], buf_logp[t], buf_val[t] = next_obs, action, logp, value
                 buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
                 actions = action.cpu().numpy()
+                phases.lap("bookkeeping")
                 raw, reward, term, trunc, info = envs.step(actions)
+                phases.lap("env")
                 if twin is not None:
                     if aux_head is not None:
                         buf_feat[t] = next_feat
@@ -253,7 +260,9 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 # Truncation is treated as termination (10,000 steps is ten horizons of γ = 0.999).
                 buf_done[t] = torch.from_numpy(done.astype(np.float32)).to(device)
                 next_done = done
+                phases.lap("bookkeeping")
                 next_obs = encode(raw)
+                phases.lap("obs_norm")
 
             # --- Advantages: GAE over valid steps; a reset step neither bootstraps nor is learned from ------------
             with torch.no_grad():
@@ -277,6 +286,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             b_feat = buf_feat.reshape(-1, feat_dim)[mask] if aux_head is not None else None
             b_teach = buf_teach.reshape(-1, 5)[mask] if teacher is not None else None
             size = b_obs.shape[0]
+            phases.lap("gae")
             # The teacher's weight falls linearly to 0 at teacher_fade × total_steps (env steps, as every schedule).
             teach_w = recipe.teacher_coef * max(1.0 - env_steps / (recipe.teacher_fade * recipe.total_steps), 0.0)
 
@@ -319,6 +329,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                     stats[:6] += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1]
                     stats[6:] += [aux_loss.item(), teacher_kl.item()]
             update += 1
+            phases.lap("update")
             var_ret = b_ret.var().item()
             explained = float("nan") if var_ret == 0 else 1 - (b_ret - b_val).var().item() / var_ret
 
@@ -354,6 +365,8 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             writer.row(row)
             if update % 50 == 0:
                 save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+            phases.lap("logging")
+            phases.steps = env_steps
     finally:
         writer.close()
         envs.close()
