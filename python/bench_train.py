@@ -39,7 +39,7 @@ CASES = [name for name in ("features", "fast", "pixels") if name in PRESETS]
 
 
 def recipe_for(case: str, steps: int, device: str, smoke: bool) -> Recipe:
-    r = Recipe(**PRESETS[case], total_steps=steps, device=device)
+    r = Recipe(**{**PRESETS[case], "total_steps": steps, "device": device})
     if smoke:
         r = replace(r, num_envs=8, num_steps=16, num_minibatches=2, update_epochs=2)
     return r

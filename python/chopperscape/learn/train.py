@@ -395,8 +395,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--steps",
         type=int,
-        default=DEFAULT_STEPS,
-        help=f"env-step budget; the learning rate anneals over it (default {DEFAULT_STEPS:,})",
+        default=None,
+        help=f"env-step budget; the learning rate anneals over it (default the preset's, else {DEFAULT_STEPS:,})",
     )
     p.add_argument(
         "--minutes",
@@ -422,8 +422,8 @@ def main(argv: list[str] | None = None) -> int:
         "--preset",
         choices=sorted(PRESETS),
         default="features",
-        help="recipe preset: features (the default), pixels (grayscale frames, a CNN) or pixels-large (the same "
-        "with 256 envs, for --device cuda); flags override it",
+        help="recipe preset: features (the default), fast (features at frame skip 4, learning in minutes), pixels "
+        "(grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it",
     )
     defaults = Recipe()
     for f in RECIPE_FLAGS:
@@ -443,6 +443,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
     a = p.parse_args(args)
     preset = dict(PRESETS[a.preset])
+    steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
+    preset.pop("total_steps", None)
     allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
     options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
     settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
@@ -453,7 +455,7 @@ def main(argv: list[str] | None = None) -> int:
         norm_obs=not a.no_norm_obs,
         norm_reward=not a.no_norm_reward,
         invert_frames=not a.no_invert_frames,
-        total_steps=a.steps,
+        total_steps=steps,
     )
     try:
         check_recipe(recipe)

@@ -1,0 +1,72 @@
+"""The fast preset (`--preset fast`) and the phase benchmark, at smoke size: learning in minutes is a benchmark
+(docs/learning.md, "Learning in minutes"), not a test; these check that the preset trains, saves, reloads and
+evaluates with finite losses, and that `python/bench_train.py` still runs and accounts for every phase."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_fast_preset_trains_reloads_and_evaluates(tmp_path, capsys):
+    from chopperscape.learn import evaluate, train
+    from chopperscape.learn.recipe import PRESETS, Recipe
+
+    recipe = replace(Recipe(**PRESETS["fast"]), num_envs=16, num_steps=32, total_steps=2048)
+    path = train.train(recipe, tmp_path)
+    rows = list(csv.DictReader(open(tmp_path / "progress.csv")))
+    assert rows and int(rows[-1]["env_steps"]) >= 2048
+    assert all(math.isfinite(float(v)) for r in rows for k, v in r.items() if v and k != "wall_s")
+    saved = json.loads((tmp_path / "recipe.json").read_text())
+    assert saved["env_options"]["frame_skip"] == PRESETS["fast"]["env_options"]["frame_skip"]
+    # The model plays at the preset's frame skip without being told it.
+    assert evaluate.main([str(path), "--episodes", "2", "--seed", "1000000"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["episodes"] == 2 and math.isfinite(result["mean_return"])
+
+
+def test_the_preset_is_the_command_lines(tmp_path):
+    """`--preset fast` on the command line is PRESETS["fast"]; a flag given beside it wins."""
+    from chopperscape.learn import train
+
+    out = tmp_path / "run"
+    code = train.main(
+        ["--preset", "fast", "--num-envs", "8", "--num-steps", "16", "--steps", "256", "--out", str(out)]
+    )
+    assert code == 0
+    saved = json.loads((out / "recipe.json").read_text())
+    from chopperscape.learn.recipe import PRESETS
+
+    for key, value in PRESETS["fast"].items():
+        if key not in ("num_envs", "num_steps"):
+            assert saved[key] == value, key
+    assert (saved["num_envs"], saved["num_steps"]) == (8, 16)
+
+
+def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
+    from chopperscape.learn.phases import PHASES
+
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "fast"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    for phase in PHASES:
+        (row,) = [line for line in lines if line.startswith(phase + " ")]
+        assert float(row.split()[1]) >= 0, row
+    assert any(line.startswith("## fast:") for line in lines)
