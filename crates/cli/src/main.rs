@@ -14,6 +14,7 @@ mod output;
 #[cfg(feature = "window")]
 mod overlay;
 mod progress;
+mod recording;
 mod report;
 mod server;
 #[cfg(feature = "window")]

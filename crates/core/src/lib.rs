@@ -36,8 +36,6 @@ mod config;
 pub mod consts;
 mod env;
 mod error;
-#[cfg(feature = "export")]
-pub mod export;
 pub mod features;
 mod geometry;
 pub mod limits;

@@ -9,11 +9,8 @@
 //! UPDATE_GOLDEN=1 cargo test -p chopperscape-core --test render_golden
 //! ```
 
-#![cfg(feature = "export")]
-
 use std::path::PathBuf;
 
-use chopperscape::export::write_png;
 use chopperscape::render::{Hud, HudScale, PixelFormat, Renderer};
 use chopperscape::{ChopperScape, Config, Env, Observation, World};
 
@@ -45,12 +42,27 @@ fn read_png(name: &str) -> Frame {
     Frame { pixels, height: info.height, width: info.width, format }
 }
 
+/// The frame as a PNG file's bytes (the core does no I/O and encodes no images: the CLI's `media/` records them;
+/// this is the tests' own writer of golden files).
+fn png_bytes(frame: &Frame) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, frame.width, frame.height);
+    enc.set_color(match frame.format {
+        PixelFormat::Rgb => png::ColorType::Rgb,
+        PixelFormat::Gray => png::ColorType::Grayscale,
+    });
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_compression(png::Compression::Fast);
+    let mut w = enc.write_header().unwrap();
+    w.write_image_data(&frame.pixels).unwrap();
+    w.finish().unwrap();
+    bytes
+}
+
 fn check(name: &str, frame: Frame) {
     let path = golden_path(name);
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
-        let mut bytes = Vec::new();
-        write_png(&mut bytes, &frame.pixels, frame.height, frame.width, frame.format).unwrap();
-        std::fs::write(&path, bytes).unwrap();
+        std::fs::write(&path, png_bytes(&frame)).unwrap();
         return;
     }
     let want = read_png(name);
@@ -58,9 +70,7 @@ fn check(name: &str, frame: Frame) {
     if want.pixels != frame.pixels {
         let differ = want.pixels.iter().zip(&frame.pixels).filter(|(a, b)| a != b).count();
         let out = std::env::temp_dir().join(format!("{name}.actual.png"));
-        let mut bytes = Vec::new();
-        write_png(&mut bytes, &frame.pixels, frame.height, frame.width, frame.format).unwrap();
-        std::fs::write(&out, bytes).unwrap();
+        std::fs::write(&out, png_bytes(&frame)).unwrap();
         panic!("{name}: {differ} bytes differ from {}; this frame is in {}", path.display(), out.display());
     }
 }

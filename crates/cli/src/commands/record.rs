@@ -1,7 +1,6 @@
 //! `chopperscape record`: one episode of a built-in or a trained policy to a video, a folder of frames, or
 //! an action log.
 
-use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
@@ -9,8 +8,8 @@ use clap::Args;
 
 use super::{PolicyArg, policy_and_config, policy_parser, table_header, table_row};
 use crate::episode::play_policy;
+use crate::recording::{RecordOutputs, render};
 use crate::options::GameOptions;
-use crate::output::{PendingDir, check_free};
 use crate::{actionlog, output, progress, usage_bail};
 
 /// Record one episode of a built-in or a trained policy.
@@ -39,56 +38,6 @@ pub struct RecordArgs {
     pub options: GameOptions,
 }
 
-/// Where a recording goes (shared by `record` and `replay`).
-#[derive(Args, Debug, Clone)]
-pub struct RecordOutputs {
-    /// Video file: .gif, .png (animated PNG) or .mp4 (needs the ffmpeg program)
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-    /// Folder to write numbered PNG frames into (frame_00000.png, …)
-    #[arg(long, value_name = "DIR")]
-    pub frames: Option<PathBuf>,
-    /// Write the episode as an action log (JSON) for `chopperscape replay`
-    #[arg(long, value_name = "FILE")]
-    pub save_actions: Option<PathBuf>,
-    /// Overwrite existing outputs
-    #[arg(long)]
-    pub force: bool,
-}
-
-impl RecordOutputs {
-    /// Checks every destination before anything is played, so a refusal costs nothing: each is free (or
-    /// `--force` is given), its folder exists, and no two of them (nor `input`, the file read) are one file.
-    ///
-    /// # Errors
-    /// A [`crate::UsageError`] for two outputs on one file or a bad extension; another error for an output
-    /// that exists or cannot be written.
-    pub fn check(&self, input: Option<(&str, &Path)>) -> Result<()> {
-        let mut paths: Vec<(&str, &Path, bool)> = Vec::new();
-        paths.extend(input.map(|(what, p)| (what, p, false)));
-        paths.extend(self.out.as_deref().map(|p| ("--out", p, false)));
-        paths.extend(self.frames.as_deref().map(|p| ("--frames", p, true)));
-        paths.extend(self.save_actions.as_deref().map(|p| ("--save-actions", p, false)));
-        crate::distinct::check(&paths)?;
-        if let Some(out) = &self.out {
-            crate::media::Format::from_path(out)?;
-            check_free(out, self.force)?;
-        }
-        if let Some(dir) = &self.frames {
-            PendingDir::check(dir, self.force)?;
-        }
-        if let Some(path) = &self.save_actions {
-            check_free(path, self.force)?;
-        }
-        Ok(())
-    }
-
-    /// Whether any output is asked for.
-    pub fn any(&self) -> bool {
-        self.out.is_some() || self.frames.is_some() || self.save_actions.is_some()
-    }
-}
-
 /// Runs `record`.
 pub fn run(args: RecordArgs) -> Result<ExitCode> {
     let o = &args.outputs;
@@ -107,7 +56,7 @@ pub fn run(args: RecordArgs) -> Result<ExitCode> {
     });
     counter.finish_and_clear();
     let episode = episode?;
-    super::replay::render(&config, &episode, o)?;
+    render(&config, &episode, o)?;
     if let Some(path) = &o.save_actions {
         output::write_atomic(
             path,

@@ -4,12 +4,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Result, bail};
-use chopperscape::Config;
 use clap::Args;
 
-use super::record::RecordOutputs;
-use crate::episode::{EpisodeResult, replay_actions};
-use crate::media::{Recorder, open_frames, open_video};
+use crate::episode::replay_actions;
+use crate::recording::{RecordOutputs, recorder};
 use crate::{actionlog, progress, usage_bail};
 
 /// Re-run a saved action log and check that it reproduces its recorded length, return and end exactly.
@@ -82,31 +80,4 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// The sinks `outputs` asks for (none for an action log alone).
-fn recorder(outputs: &RecordOutputs, frames: u32) -> Result<Recorder> {
-    let mut sinks = Vec::new();
-    if let Some(out) = &outputs.out {
-        sinks.push(open_video(out, frames, outputs.force)?);
-    }
-    if let Some(dir) = &outputs.frames {
-        sinks.push(open_frames(dir, outputs.force)?);
-    }
-    Ok(Recorder::new(sinks))
-}
-
-/// Draws `episode` into the video and frame outputs of `outputs` (for `record`).
-pub fn render(config: &Config, episode: &EpisodeResult, outputs: &RecordOutputs) -> Result<()> {
-    let mut recorder = recorder(outputs, episode.steps + 1)?;
-    if recorder.is_empty() {
-        return Ok(());
-    }
-    let bar = progress::bar(u64::from(episode.steps) + 1, "recording", false);
-    replay_actions(config, episode.seed, &episode.actions, |env| {
-        bar.inc(1);
-        recorder.push(env)
-    })?;
-    bar.finish_and_clear();
-    recorder.finish()
 }
