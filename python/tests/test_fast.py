@@ -41,9 +41,7 @@ def test_the_preset_is_the_command_lines(tmp_path):
     from chopperscape.learn import train
 
     out = tmp_path / "run"
-    code = train.main(
-        ["--preset", "fast", "--num-envs", "8", "--num-steps", "16", "--steps", "256", "--out", str(out)]
-    )
+    code = train.main(["--preset", "fast", "--num-envs", "8", "--num-steps", "16", "--steps", "256", "--out", str(out)])
     assert code == 0
     saved = json.loads((out / "recipe.json").read_text())
     from chopperscape.learn.recipe import PRESETS

@@ -105,13 +105,12 @@ def load_teacher(recipe: Recipe) -> Model:
     return teacher
 
 
-def train(
-    recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False, phases: Phases = OFF
-) -> Path:
+def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False, phases: Phases = OFF) -> Path:
     """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
-    model path. `phases` (a :class:`~chopperscape.learn.phases.Phases`) collects where the wall time went. `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before
-    anything is written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
+    model path. `phases` (a :class:`~chopperscape.learn.phases.Phases`) collects where the wall time went.
+    `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before anything is
+    written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
     out = Path(out)
     check_recipe(recipe)
     check_minutes(minutes)
