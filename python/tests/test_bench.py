@@ -252,7 +252,7 @@ def test_the_leaderboard_page_shows_the_committed_results():
         assert row in page, f"docs/site/bench.md lacks the row (regenerate it, see the page):\n{row}"
 
 
-@pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md"])
+@pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md", "docs/site/environment.md"])
 def test_the_modes_tables_of_the_docs_are_the_cores(page):
     text = (ROOT / page).read_text()
     for m in chopperscape.MODES:
