@@ -105,6 +105,15 @@ def test_training_seeds_never_reach_the_evaluation_seeds():
             protocol.check_training_seeds(first, count)
 
 
+def test_declared_training_seeds_are_checked_and_recorded(capsys):
+    doc = evaluate.run("chopperscape.bench.examples:always_up", "v0", train_seeds=(0, 64))
+    assert doc["policy"]["train_seeds"] == [0, 64]
+    args = ["evaluate", "chopperscape.bench.examples:always_up", "--mode", "v0", "--train-seeds", "999999:2"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "overlap the evaluation seeds" in err[0]
+
+
 def test_a_model_trained_on_the_evaluation_seeds_is_refused(tmp_path):
     torch = pytest.importorskip("torch")
     payload = torch.load(MODEL, weights_only=True)

@@ -22,6 +22,11 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--stochastic", action="store_true", help="sample a trained policy's actions (not greedy)")
     e.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="observation option")
     e.add_argument("--trust-pickle", action="store_true", help="allow pickled parts of an SB3 .zip (runs code)")
+    e.add_argument(
+        "--train-seeds",
+        metavar="FIRST:COUNT",
+        help="the reset seeds the policy was trained on, where its file does not say (checked, recorded)",
+    )
     e.add_argument("--out", metavar="FILE", help="write the results file here (atomically); default: print it")
     r = sub.add_parser("report", help="aggregates with 95 %% intervals over results files, and their plots")
     r.add_argument("results", nargs="+", metavar="RESULTS")
@@ -36,7 +41,14 @@ def main(argv: list[str] | None = None) -> int:
             return print_line(json.dumps({"modes": protocol.MODES, "protocol": protocol.PROTOCOL}, indent=2))
         if a.command == "evaluate":
             options = parse_options(a.option, ENV_OPTIONS)
-            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle)
+            seeds = None
+            if a.train_seeds is not None:
+                first, sep, count = a.train_seeds.partition(":")
+                try:
+                    seeds = (int(first), int(count) if sep else 1)
+                except ValueError:
+                    p.error(f"--train-seeds {a.train_seeds!r}: expected FIRST:COUNT, e.g. 0:64")
+            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds)
             text = results.dumps(doc)
             if a.out is None:
                 return print_line(text.rstrip("\n"))

@@ -199,14 +199,24 @@ def run(
     stochastic: bool = False,
     policy_seed: int = 0,
     trust_pickle: bool = False,
+    train_seeds: tuple[int, int] | None = None,
 ) -> dict[str, Any]:
-    """Evaluates `policy` on mode `mode` under the protocol; the results document (checked)."""
+    """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
+    (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
+    `.zip`, a callable): they are checked against the evaluation seeds and recorded."""
     from ..learn.evaluate import play_episodes
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
         raise ValueError(f"--policy-seed {policy_seed!r}: allowed 0 <= seed < 2**31")
     m = protocol.mode(mode)
+    if train_seeds is not None:
+        protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
     loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)
+    if train_seeds is not None:
+        known = loaded.info["train_seeds"]
+        if known is not None and known != list(train_seeds):
+            raise ValueError(f"--train-seeds {train_seeds[0]}:{train_seeds[1]}: policy {policy!r} records {known}")
+        loaded.info["train_seeds"] = list(train_seeds)
     episodes = play_episodes(
         loaded.act,
         protocol.EVAL_EPISODES,

@@ -137,7 +137,7 @@ def report(
 ) -> list[dict[str, Any]]:
     """One row per policy and mode (or per policy, `pool_modes`): runs per mode, the mean return per mode, and the
     aggregates of the normalised scores with their intervals."""
-    rows = []
+    rows: list[dict[str, Any]] = []
     for label, by_mode in group(docs, pool_modes).items():
         modes = [m["name"] for m in MODES if m["name"] in by_mode]
         tasks = [np.array(by_mode[m]) for m in modes]
