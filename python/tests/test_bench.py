@@ -156,6 +156,23 @@ def test_callable_and_onnx_policies(tmp_path):
     assert onnx["episodes"] == pt["episodes"]  # the export acts as the model
 
 
+def test_an_sb3_zip_plays_the_mode_it_is_given(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    venv = ChopperScapeVecEnv(4, seed=0, mode="sticky-v0", obs_type="features")
+    model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
+    model.learn(64)
+    model.save(tmp_path / "tiny.zip")
+    doc = evaluate.run(str(tmp_path / "tiny.zip"), "sticky-v0", {"obs_type": "features"}, train_seeds=(0, 4))
+    assert doc["policy"]["kind"] == "sb3" and doc["policy"]["actions"] == "greedy"
+    assert doc["mode"]["name"] == "sticky-v0" and doc["policy"]["train_seeds"] == [0, 4]
+    again = evaluate.run(str(tmp_path / "tiny.zip"), "sticky-v0", {"obs_type": "features"}, train_seeds=(0, 4))
+    assert results.comparable(again) == results.comparable(doc)
+
+
 def test_atomic_write_leaves_the_old_file_on_failure(tmp_path, monkeypatch):
     target = tmp_path / "r.json"
     target.write_text("old")
