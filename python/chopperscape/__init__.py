@@ -1,6 +1,7 @@
 """ChopperScape-v0 for Gymnasium: a Rust game behind a `gymnasium.Env` and a native `gymnasium.vector.VectorEnv`.
 
-Importing the package registers `ChopperScape-v0`:
+Importing the package registers `ChopperScape-v0` and one id per difficulty mode of ChopperScape-Bench
+(`MODES`: `ChopperScape-Sticky-v0`, `ChopperScape-Full-v0`; `mode="sticky-v0"` chooses the same rules):
 
 >>> import gymnasium as gym, chopperscape
 >>> env = gym.make("ChopperScape-v0", obs_type="features")
@@ -18,6 +19,7 @@ from .vector import VectorEnv
 __all__ = [
     "ACTION_MEANINGS",
     "FEATURES_VERSION",
+    "MODES",
     "OPTION_NAMES",
     "PIXELS_VERSION",
     "ChopperScapeEnv",
@@ -30,6 +32,10 @@ __all__ = [
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
+#: The difficulty modes (ChopperScape-Bench, `docs/site/bench.md`), easiest first, as the core declares them:
+#: `name` (what `mode=` takes), `id` (its Gymnasium id), `doc`, `options` (the rules options it sets, as text;
+#: every other rules option keeps its default; observation options stay free).
+MODES: list[dict] = [dict(m, options=dict(m["options"])) for m in _core.MODES]
 #: The layout version of the `"features"` observation.
 FEATURES_VERSION: int = _core.FEATURES_VERSION
 #: The version of what pixel observations show (docs/SPEC.md, "HUD and pixel layout"): 2 = fuel and lives gauges
@@ -43,3 +49,14 @@ if "ChopperScape-v0" not in registry:
         vector_entry_point="chopperscape.vector:VectorEnv",
         max_episode_steps=10_000,
     )
+# One id per rung. ChopperScape-v0 itself stays as it always was (v0 by default, every option open); the others
+# carry `mode=`, so an option that contradicts the rung is refused.
+for _mode in MODES:
+    if _mode["id"] not in registry:
+        register(
+            id=_mode["id"],
+            entry_point="chopperscape.env:registered",
+            vector_entry_point="chopperscape.vector:VectorEnv",
+            max_episode_steps=10_000,
+            kwargs={"mode": _mode["name"]},
+        )

@@ -12,6 +12,10 @@ OPTION_NAMES: list[str]
 #: reads it), `allowed` (in words, as the errors say), `doc` (one line) and `rule` (a rules option, as action logs
 #: record, rather than an observation setting).
 OPTIONS: list[dict[str, Any]]
+#: The difficulty modes of ChopperScape-Bench, easiest first, each `name` (what `mode=` takes), `id` (its Gymnasium
+#: id), `doc` (one line) and `options` (the rules options it sets, as text; every other rules option keeps its
+#: default).
+MODES: list[dict[str, Any]]
 CAUSE_NAMES: list[str]
 SNAPSHOT_VERSION: int
 #: The layout version of the `"features"` observation (the Rust docs of `chopperscape::features` give the history).

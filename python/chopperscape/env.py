@@ -109,6 +109,7 @@ class ChopperScapeEnv(gym.Env):
     | `hud` | `True` | `True`, `False`: draw the HUD (fuel and lives, see above) into pixel observations |
     | `hud_style` | `"auto"` | `"auto"` (text in frames of at least 300 × 400, bars below), `"text"`, `"gauge"`; `render()` shows the text unless `"gauge"` |
     | `keep_dim` | `False` | give `"grayscale"` without stacking a channel axis, `(H, W, 1)` instead of `(H, W)` (what CNN policies such as SB3's `CnnPolicy` expect; a view, no copy) |
+    | `mode` | `None` | `None`, `"v0"`, `"sticky-v0"`, `"full-v0"`: a difficulty mode of ChopperScape-Bench (`chopperscape.MODES`), which fixes every rules option below (an option given beside it must agree); `gymnasium.make("ChopperScape-Sticky-v0")` and `"ChopperScape-Full-v0"` give it |
     | `lives` | 1 | 1..=1000 |
     | `bird_fuel_collision` | `"pass"` | `"pass"`, `"destroy"` |
     | `alien_prob` | 0 | [0, 1] |
@@ -137,6 +138,9 @@ class ChopperScapeEnv(gym.Env):
 
     ## Version History
     - v0: the tutorial's game with its contradictions resolved as SPEC.md states.
+    - ChopperScape-Sticky-v0, ChopperScape-Full-v0 (modes `sticky-v0`, `full-v0`): the v0 game with fixed
+      options: frame skip 4 and sticky actions 0.25 (as ALE v5); and with 3 lives, aliens (0.005) and bird–fuel
+      collisions. See `docs/SPEC.md`, "Difficulty modes".
     """  # noqa: E501 - the Markdown tables above cannot wrap
 
     metadata = {  # noqa: RUF012 - Gymnasium declares `metadata` a plain attribute

@@ -12,6 +12,8 @@
 //!   (features, or pixels from the [`render::Renderer`], stacked `frame_stack` deep). Its hot path
 //!   [`ChopperScape::step_into`] writes into a buffer the caller owns.
 //! - [`Snapshot`] clones and restores a whole environment, and encodes it to versioned bytes.
+//! - [`MODES`] is the ladder of difficulty modes (ChopperScape-Bench): named, versioned rule sets, each
+//!   applied to a [`Config`] with [`Mode::apply`].
 //! - [`policy`] holds the built-in policies: `random`, fixed actions, and the scripted `heuristic`.
 //!
 //! # Examples
@@ -39,6 +41,7 @@ mod error;
 pub mod features;
 mod geometry;
 pub mod limits;
+mod modes;
 mod obs_buffer;
 mod obs_pipeline;
 pub mod policy;
@@ -55,6 +58,7 @@ pub use config::{BirdFuelCollision, Config, HudStyle, OPTION_NAMES, OPTIONS, Obs
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;
+pub use modes::{MODES, Mode, mode, mode_names};
 pub use obs_buffer::{ObsBufMut, ObsData, Observation};
 pub use obs_pipeline::luma;
 pub use rng::Rng;

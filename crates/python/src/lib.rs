@@ -41,6 +41,7 @@ mod _core {
         m.add("ACTION_MEANINGS", chopperscape::ACTION_MEANINGS.to_vec())?;
         m.add("OPTION_NAMES", chopperscape::OPTION_NAMES.to_vec())?;
         m.add("OPTIONS", options::option_table(m.py())?)?;
+        m.add("MODES", options::mode_table(m.py())?)?;
         m.add("CAUSE_NAMES", chopperscape_vector::CAUSE_NAMES.to_vec())?;
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
         m.add("FEATURES_VERSION", chopperscape::features::FEATURES_VERSION)?;

@@ -15,12 +15,25 @@ use crate::errors::config_error;
 ///
 /// # Errors
 /// `ValueError` naming the first unknown option or value out of range.
+///
+/// `mode` (a name of [`chopperscape::MODES`], or `None` for none) is applied first, whatever its place in the dict;
+/// the other options go on top, and one that contradicts the mode's fixed rules is refused, naming the mode.
 pub(crate) fn config_from(options: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
     let mut config = Config::default();
     let Some(options) = options else { return Ok(config) };
+    let mode = match options.get_item("mode")? {
+        Some(value) if !value.is_none() => Some(mode_of(&value)?),
+        _ => None,
+    };
+    if let Some(mode) = mode {
+        mode.apply(&mut config).map_err(config_error)?;
+    }
     for (name, value) in options.iter() {
         let name: String =
             name.extract().map_err(|_| PyValueError::new_err(format!("option names must be strings, got {name:?}")))?;
+        if name == "mode" {
+            continue;
+        }
         if name == "obs_size" && !value.is_instance_of::<PyString>() {
             set_obs_size(&mut config, &value)?;
             continue;
@@ -28,7 +41,58 @@ pub(crate) fn config_from(options: Option<&Bound<'_, PyDict>>) -> PyResult<Confi
         let text = option_text(&name, &value)?;
         config.set(&name, &text).map_err(config_error)?;
     }
+    if let Some(mode) = mode {
+        let wrong = mode.contradictions(&config);
+        if !wrong.is_empty() {
+            return Err(PyValueError::new_err(format!(
+                "options contradict mode {:?}, whose rules options are fixed ({}): {}; drop them, or give no mode",
+                mode.name,
+                fixed_text(mode),
+                wrong.join(", ")
+            )));
+        }
+    }
     Ok(config)
+}
+
+/// The mode named by a Python value: a string of [`chopperscape::MODES`].
+fn mode_of(value: &Bound<'_, PyAny>) -> PyResult<&'static chopperscape::Mode> {
+    let name = value.cast::<PyString>().map(|s| s.to_string()).ok();
+    name.as_deref().and_then(chopperscape::mode).ok_or_else(|| {
+        let repr = value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+        PyValueError::new_err(format!(
+            "invalid value {repr} for option `mode`: allowed None or one of {}",
+            chopperscape::mode_names()
+        ))
+    })
+}
+
+/// A mode's options as `name=value, ...` (`v0 defaults` when it sets none).
+fn fixed_text(mode: &chopperscape::Mode) -> String {
+    if mode.options.is_empty() {
+        return "every rules option at its default".into();
+    }
+    let set: Vec<String> = mode.options.iter().map(|(n, v)| format!("{n}={v}")).collect();
+    format!("{}, the others at their defaults", set.join(", "))
+}
+
+/// `_core.MODES`: the difficulty modes ([`chopperscape::MODES`]), easiest first, each a dict with `name`, `id`
+/// (the Gymnasium id), `doc` and `options` (a dict of the rules options it sets, as text [`option_value`] reads).
+pub(crate) fn mode_table(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let table = PyList::empty(py);
+    for m in chopperscape::MODES {
+        let row = PyDict::new(py);
+        row.set_item("name", m.name)?;
+        row.set_item("id", m.id)?;
+        row.set_item("doc", m.doc)?;
+        let options = PyDict::new(py);
+        for (n, v) in m.options {
+            options.set_item(n, v)?;
+        }
+        row.set_item("options", options)?;
+        table.append(row)?;
+    }
+    Ok(table)
 }
 
 /// `obs_size` from a Python value: a tuple, list or array of two ints.

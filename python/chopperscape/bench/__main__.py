@@ -1,0 +1,74 @@
+"""`python -m chopperscape.bench {modes,evaluate,report}` (see `chopperscape.bench`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .._cli import ENV_OPTIONS, parse_options, print_line
+from . import evaluate, protocol, report, results
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m chopperscape.bench", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    sub.add_parser("modes", help="the difficulty modes and the protocol, as JSON")
+    e = sub.add_parser("evaluate", help="evaluate a policy on one mode under the protocol")
+    e.add_argument("policy", help="a built-in policy, a .pt, .onnx or SB3 .zip file, or pkg.mod:func")
+    e.add_argument("--mode", required=True, choices=[m["name"] for m in protocol.MODES])
+    e.add_argument("--policy-seed", type=int, default=0, help="the run: seeds a stochastic policy (default 0)")
+    e.add_argument("--stochastic", action="store_true", help="sample a trained policy's actions (not greedy)")
+    e.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="observation option")
+    e.add_argument("--trust-pickle", action="store_true", help="allow pickled parts of an SB3 .zip (runs code)")
+    e.add_argument(
+        "--train-seeds",
+        metavar="FIRST:COUNT",
+        help="the reset seeds the policy was trained on, where its file does not say (checked, recorded)",
+    )
+    e.add_argument("--out", metavar="FILE", help="write the results file here (atomically); default: print it")
+    r = sub.add_parser("report", help="aggregates with 95 %% intervals over results files, and their plots")
+    r.add_argument("results", nargs="+", metavar="RESULTS")
+    r.add_argument("--plots", metavar="DIR", help="write intervals.FMT and profile.FMT here")
+    r.add_argument("--format", choices=("png", "svg"), default="png")
+    r.add_argument("--pool-modes", action="store_true", help="one row per policy over its modes (tasks)")
+    r.add_argument("--json", action="store_true", help="print the rows as JSON instead of a Markdown table")
+    r.add_argument("--resamples", type=int, default=report.RESAMPLES, help=argparse.SUPPRESS)
+    a = p.parse_args(argv)
+    try:
+        if a.command == "modes":
+            return print_line(json.dumps({"modes": protocol.MODES, "protocol": protocol.PROTOCOL}, indent=2))
+        if a.command == "evaluate":
+            options = parse_options(a.option, ENV_OPTIONS)
+            seeds = None
+            if a.train_seeds is not None:
+                first, sep, count = a.train_seeds.partition(":")
+                try:
+                    seeds = (int(first), int(count) if sep else 1)
+                except ValueError:
+                    p.error(f"--train-seeds {a.train_seeds!r}: expected FIRST:COUNT, e.g. 0:64")
+            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds)
+            text = results.dumps(doc)
+            if a.out is None:
+                return print_line(text.rstrip("\n"))
+            results.write_atomic(a.out, text)
+            s = doc["summary"]
+            return print_line(f"{a.out}: {a.mode}, mean return {s['mean_return']}, score {s['score']}")
+        docs = report.load_all(a.results)
+        if a.resamples < 100:
+            p.error("--resamples: at least 100")
+        rows = report.report(docs, a.resamples, a.pool_modes)
+        if a.plots:
+            report.plot(docs, rows, Path(a.plots), a.format, a.pool_modes)
+        return print_line(json.dumps(rows, indent=2) if a.json else report.markdown(rows).rstrip("\n"))
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

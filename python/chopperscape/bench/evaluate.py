@@ -1,0 +1,247 @@
+"""Evaluates any policy under the protocol on one mode and writes a results file.
+
+    python -m chopperscape.bench evaluate POLICY --mode MODE [--policy-seed R] [--out FILE]
+
+`POLICY` is one of:
+
+- a built-in policy's name (`random`, `heuristic`, `noop`, …; a file of that name is given as `./NAME`);
+- a `chopperscape.learn.train` model (`.pt`, read with `torch.load(weights_only=True)`);
+- an exported policy (`.onnx`, from `python -m chopperscape.learn.export`; run by onnxruntime);
+- a Stable-Baselines3 PPO `.zip` (give the observation it was trained on: `--option obs_type=features`);
+- a Python callable by import path, `pkg.mod:func`, called as `func(obs_batch) -> actions` on a batch of
+  observations (`--option` chooses them; features by default).
+
+The mode fixes the rules (a model's own training rules are replaced by the mode's); `--option NAME=VALUE` takes
+observation options only. The run is the protocol's (:mod:`.protocol`): 100 episodes from seed 1,000,000, the
+10,000-step limit, greedy actions for trained policies (`--stochastic` samples, seeded by `--policy-seed`). The
+results file (:mod:`.results`) is written atomically to `--out` (otherwise printed). Exit status 0; 2 with one
+line on standard error for a bad argument, a policy that cannot be read, or a policy trained on the evaluation
+seeds.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import importlib.util
+import inspect
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .. import __version__
+from ..policies import NAMES, VectorPolicy
+from ..vector import VectorEnv
+from . import protocol, results
+
+#: What `--option` takes: observation options only (a mode fixes the rules; the protocol the step limit).
+OBS_OPTIONS = ("obs_type", "obs_size", "frame_stack", "hud", "hud_style", "keep_dim")
+
+Act = Callable[[np.ndarray, VectorEnv], np.ndarray]
+
+
+def sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+class Builtin:
+    """A built-in policy over each chunk of episodes: episode `k`'s policy seeded `run · 2**32 + k`."""
+
+    def __init__(self, name: str, run: int):
+        self.name, self.run = name, run
+        self.policy: VectorPolicy | None = None
+
+    def start_chunk(self, n: int, seed: int) -> None:
+        self.policy = VectorPolicy(self.name, n, seed=protocol.policy_seed(self.run, seed - protocol.EVAL_SEED))
+
+    def __call__(self, obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
+        assert self.policy is not None
+        return self.policy.act(envs)
+
+
+class Loaded:
+    """A policy ready to play: how it acts, the env options it plays with, and what the results file says of it."""
+
+    def __init__(self, act: Act, options: dict[str, Any], info: dict[str, Any]):
+        self.act, self.options, self.info = act, options, info
+
+
+def _need(module: str, what: str) -> None:
+    if importlib.util.find_spec(module) is None:
+        raise ValueError(f"{what} needs {module}, which is not installed: pip install {module.replace('_', '-')}")
+
+
+def load(
+    policy: str,
+    mode: str,
+    options: dict[str, Any] | None = None,
+    stochastic: bool = False,
+    run: int = 0,
+    trust_pickle: bool = False,
+) -> Loaded:
+    """The policy `policy` (see the module's docs) set up to play mode `mode` with observation `options`."""
+    options = dict(options or {})
+    bad = sorted(set(options) - set(OBS_OPTIONS))
+    if bad:
+        raise ValueError(f"option {bad[0]!r}: the bench takes observation options only ({', '.join(OBS_OPTIONS)})")
+    rules = protocol.mode_options(mode)
+    actions = "sampled" if stochastic else "greedy"
+    info: dict[str, Any] = {"source": policy, "sha256": None, "recipe": None, "train_seeds": None}
+    if policy in NAMES:
+        if stochastic:
+            raise ValueError(f"--stochastic is for trained policies; built-in {policy!r} acts as it is")
+        info.update(kind="builtin", actions="as-is")
+        return Loaded(Builtin(policy, run), {"obs_type": "features", **options, **rules}, info)
+    if ":" in policy and not Path(policy).exists():
+        return _callable(policy, {**options, **rules}, stochastic, info)
+    path = Path(policy)
+    if not path.is_file():
+        raise ValueError(
+            f"policy {policy!r} is not a file, a built-in policy ({', '.join(NAMES)}) or an import path pkg.mod:func"
+        )
+    info["sha256"] = sha256(path)
+    info["actions"] = actions
+    if path.suffix == ".onnx":
+        return _onnx(path, options, rules, stochastic, run, info)
+    _need("torch", f"policy file {policy!r}")
+    from ..learn import evaluate as learn_eval
+
+    if path.suffix == ".zip":
+        _need("stable_baselines3", f"policy file {policy!r}")
+        import torch
+
+        torch.manual_seed(run)
+        act, played = learn_eval.load_sb3(path, stochastic, {**options, **rules}, trust_pickle)
+        info["kind"] = "sb3"
+        return Loaded(act, played, info)
+    from ..learn.model import load as load_model
+
+    recipe = load_model(path).recipe
+    info.update(kind="recipe", recipe=recipe)
+    seed, num_envs = recipe.get("seed"), recipe.get("num_envs")
+    if isinstance(seed, int) and isinstance(num_envs, int):
+        protocol.check_training_seeds(seed, num_envs, f"policy file {policy!r}: its training")
+        info["train_seeds"] = [seed, num_envs]
+    act, played = learn_eval.load_recipe(path, stochastic, run, {**options, **rules})
+    return Loaded(act, played, info)
+
+
+def _onnx(path: Path, options: dict, rules: dict, stochastic: bool, run: int, info: dict) -> Loaded:
+    _need("onnxruntime", f"policy file {str(path)!r}")
+    import onnxruntime as ort
+
+    try:
+        session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    except Exception as e:  # onnxruntime raises its own exception types
+        raise ValueError(f"policy file {str(path)!r} is not a readable ONNX model ({str(e).splitlines()[0]})") from None
+    meta = dict(session.get_modelmeta().custom_metadata_map)
+    if not meta.get("format", "").startswith("chopperscape-policy/"):
+        raise ValueError(
+            f"policy file {str(path)!r} has no chopperscape-policy metadata (export it with "
+            "python -m chopperscape.learn.export)"
+        )
+    try:
+        trained = json.loads(meta.get("env_options", "{}"))
+    except ValueError:
+        raise ValueError(f"policy file {str(path)!r}: its env_options metadata is not JSON") from None
+    obs = {k: v for k, v in trained.items() if k in OBS_OPTIONS}
+    obs = {"obs_type": meta.get("obs_type", "features"), **obs, **options}
+    if "obs_size" in obs and isinstance(obs["obs_size"], list):
+        obs["obs_size"] = tuple(obs["obs_size"])
+    info.update(kind="onnx", recipe=meta)
+    name = session.get_inputs()[0].name
+    gen = np.random.default_rng(run)
+
+    def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
+        logits = session.run(None, {name: batch})[0]
+        if not stochastic:
+            return logits.argmax(-1)
+        p = np.exp(logits - logits.max(-1, keepdims=True))
+        p /= p.sum(-1, keepdims=True)
+        return (p.cumsum(-1) > gen.random((len(p), 1))).argmax(-1)
+
+    return Loaded(act, {**obs, **rules}, info)
+
+
+def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:
+    mod_name, _, attr = spec.partition(":")
+    try:
+        module = importlib.import_module(mod_name)
+        func = module
+        for part in attr.split("."):
+            func = getattr(func, part)
+    except (ImportError, AttributeError) as e:
+        raise ValueError(f"policy {spec!r}: cannot import it ({e})") from None
+    if not callable(func):
+        raise ValueError(f"policy {spec!r} is not callable")
+    source = inspect.getsourcefile(module)
+    info.update(kind="callable", actions="as-is", sha256=sha256(Path(source)) if source else None)
+
+    def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
+        return np.asarray(func(batch))
+
+    return Loaded(act, {"obs_type": "features", **options}, info)
+
+
+def run(
+    policy: str,
+    mode: str,
+    options: dict[str, Any] | None = None,
+    stochastic: bool = False,
+    policy_seed: int = 0,
+    trust_pickle: bool = False,
+    train_seeds: tuple[int, int] | None = None,
+) -> dict[str, Any]:
+    """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
+    (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
+    `.zip`, a callable): they are checked against the evaluation seeds and recorded."""
+    from ..learn.evaluate import play_episodes
+
+    if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
+        raise ValueError(f"--policy-seed {policy_seed!r}: allowed 0 <= seed < 2**31")
+    m = protocol.mode(mode)
+    if train_seeds is not None:
+        protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
+    loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)
+    if train_seeds is not None:
+        known = loaded.info["train_seeds"]
+        if known is not None and known != list(train_seeds):
+            raise ValueError(f"--train-seeds {train_seeds[0]}:{train_seeds[1]}: policy {policy!r} records {known}")
+        loaded.info["train_seeds"] = list(train_seeds)
+    episodes = play_episodes(
+        loaded.act,
+        protocol.EVAL_EPISODES,
+        protocol.EVAL_SEED,
+        loaded.options,
+        max_episode_steps=protocol.MAX_EPISODE_STEPS,
+    )
+    doc = {
+        "format": results.FORMAT,
+        "mode": {"name": m["name"], "id": m["id"], "options": m["options"]},
+        "protocol": protocol.PROTOCOL,
+        "policy": {
+            **loaded.info,
+            "policy_seed": policy_seed,
+            "observation": {
+                k: list(v) if isinstance(v, tuple) else v for k, v in loaded.options.items() if k in OBS_OPTIONS
+            },
+        },
+        "package": {"name": "chopperscape", "version": __version__},
+        "episodes": [{k: e[k] for k in ("seed", "return", "steps", "cause")} for e in episodes],
+        "summary": results.summary(episodes, mode),
+        "meta": {
+            "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            "python": platform.python_version(),
+            "platform": sys.platform,
+        },
+    }
+    return results.check(json.loads(results.dumps(doc)))

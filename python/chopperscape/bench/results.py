@@ -1,0 +1,176 @@
+"""The results file of one evaluation run: its schema, its check, and its atomic write.
+
+A results file is JSON, `"format": "chopperscape-bench/results/1"`:
+
+    {"format": ..., "mode": {"name", "id", "options"}, "protocol": {...},
+     "policy": {"kind", "source", "sha256", "recipe", "actions", "policy_seed", "train_seeds"},
+     "package": {"name": "chopperscape", "version"},
+     "episodes": [{"seed", "return", "steps", "cause"}, ...],
+     "summary": {"mean_return", "median_return", "std_return", "min_return", "max_return", "mean_steps", "causes",
+                 "score"},
+     "meta": {"created", "python", "platform"}}
+
+`meta` is the only part that differs between two evaluations of the same policy: everything else is a function of
+the policy, the mode and the protocol (:func:`comparable`). A file is written whole or not at all
+(:func:`write_atomic`), and read back only if every field checks (:func:`load`): a damaged file is refused with
+its name, never half-used.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+from . import protocol
+
+FORMAT = "chopperscape-bench/results/1"
+KINDS = ("builtin", "recipe", "onnx", "sb3", "callable")
+CAUSES = ("bird", "fuel", "truncated")
+ACTIONS = ("greedy", "sampled", "as-is")
+
+
+class ResultsError(ValueError):
+    """A results file that does not hold what :data:`FORMAT` says; the message starts with the file's name."""
+
+
+def summary(episodes: list[dict[str, Any]], mode: str) -> dict[str, Any]:
+    """The summary of a run's episodes (what :func:`check` recomputes and compares)."""
+    rets = sorted(int(e["return"]) for e in episodes)
+    n = len(rets)
+    mean = sum(rets) / n
+    mid = (rets[(n - 1) // 2] + rets[n // 2]) / 2
+    causes: dict[str, int] = {}
+    for e in episodes:
+        causes[e["cause"]] = causes.get(e["cause"], 0) + 1
+    return {
+        "mean_return": round(mean, 4),
+        "median_return": mid,
+        "std_return": round(math.sqrt(sum((r - mean) ** 2 for r in rets) / n), 4),
+        "min_return": rets[0],
+        "max_return": rets[-1],
+        "mean_steps": round(sum(int(e["steps"]) for e in episodes) / n, 4),
+        "causes": {k: causes[k] for k in sorted(causes)},
+        "score": round(mean / protocol.max_return(mode), 6),
+    }
+
+
+def _need(cond: bool, what: str) -> None:
+    if not cond:
+        raise ResultsError(what)
+
+
+def _int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def check(doc: Any) -> dict[str, Any]:
+    """`doc` if it is a complete, consistent results document; `ResultsError` naming the first field that is not."""
+    _need(isinstance(doc, dict), "not a JSON object")
+    _need(doc.get("format") == FORMAT, f"`format` is {doc.get('format')!r}, not {FORMAT!r}")
+    for key in ("mode", "protocol", "policy", "package", "episodes", "summary"):
+        _need(key in doc, f"`{key}` is missing")
+    mode = doc["mode"]
+    _need(isinstance(mode, dict) and isinstance(mode.get("name"), str), "`mode.name` is missing")
+    try:
+        known = protocol.mode(mode["name"])
+    except ValueError as e:
+        raise ResultsError(f"`mode.name`: {e}") from None
+    _need(
+        mode == {"name": known["name"], "id": known["id"], "options": known["options"]},
+        f"`mode` does not match mode {known['name']!r} of this package",
+    )
+    _need(
+        doc["protocol"] == protocol.PROTOCOL, f"`protocol` is not this package's protocol (version {protocol.VERSION})"
+    )
+    pol = doc["policy"]
+    _need(isinstance(pol, dict) and pol.get("kind") in KINDS, f"`policy.kind` must be one of {', '.join(KINDS)}")
+    _need(isinstance(pol.get("source"), str) and pol["source"] != "", "`policy.source` must be a non-empty string")
+    sha = pol.get("sha256")
+    _need(sha is None or (isinstance(sha, str) and len(sha) == 64), "`policy.sha256` must be 64 hex digits or null")
+    _need(pol.get("actions") in ACTIONS, f"`policy.actions` must be one of {', '.join(ACTIONS)}")
+    _need(_int(pol.get("policy_seed")) and pol["policy_seed"] >= 0, "`policy.policy_seed` must be an int >= 0")
+    seeds = pol.get("train_seeds")
+    _need(
+        seeds is None or (isinstance(seeds, list) and len(seeds) == 2 and all(_int(s) for s in seeds)),
+        "`policy.train_seeds` must be [first, count] or null",
+    )
+    if seeds is not None:
+        try:
+            protocol.check_training_seeds(seeds[0], seeds[1])
+        except ValueError as e:
+            raise ResultsError(f"`policy.train_seeds`: {e}") from None
+    pkg = doc["package"]
+    _need(isinstance(pkg, dict) and isinstance(pkg.get("version"), str), "`package.version` is missing")
+    eps = doc["episodes"]
+    _need(
+        isinstance(eps, list) and len(eps) == protocol.EVAL_EPISODES,
+        f"`episodes` must hold {protocol.EVAL_EPISODES} episodes",
+    )
+    for k, (ep, seed) in enumerate(zip(eps, protocol.eval_seeds())):
+        _need(
+            isinstance(ep, dict) and set(ep) == {"seed", "return", "steps", "cause"},
+            f"`episodes[{k}]` must hold exactly seed, return, steps, cause",
+        )
+        _need(ep["seed"] == seed, f"`episodes[{k}].seed` is {ep['seed']!r}, the protocol's is {seed}")
+        _need(_int(ep["return"]) and _int(ep["steps"]), f"`episodes[{k}]`: return and steps must be ints")
+        _need(1 <= ep["steps"] <= protocol.MAX_EPISODE_STEPS, f"`episodes[{k}].steps` out of 1..=10000")
+        _need(ep["cause"] in CAUSES, f"`episodes[{k}].cause` must be one of {', '.join(CAUSES)}")
+    _need(doc["summary"] == summary(eps, mode["name"]), "`summary` does not match `episodes`")
+    return doc
+
+
+def load(path: str | os.PathLike) -> dict[str, Any]:
+    """Reads and checks a results file; `ResultsError` whose message is `results file NAME: what is wrong`."""
+    name = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise ResultsError(f"results file {name!r}: cannot read it ({e})") from None
+    try:
+        doc = json.loads(text)
+    except ValueError as e:
+        raise ResultsError(f"results file {name!r}: not JSON ({e})") from None
+    try:
+        return check(doc)
+    except ResultsError as e:
+        raise ResultsError(f"results file {name!r}: {e}") from None
+
+
+def comparable(doc: dict[str, Any]) -> dict[str, Any]:
+    """Everything but `meta`: what two evaluations of the same policy must agree on."""
+    return {k: v for k, v in doc.items() if k != "meta"}
+
+
+def dumps(doc: dict[str, Any]) -> str:
+    """The file's text: sorted keys, two-space indent, a final newline (stable for diffs and hashes)."""
+    return json.dumps(doc, indent=2, sort_keys=True) + "\n"
+
+
+def write_atomic(path: str | os.PathLike, text: str) -> None:
+    """Writes `text` to `path` whole or not at all: a temporary file beside it named with the process id
+    (`.NAME.PID.tmp`), flushed and fsynced, then `os.replace`d over `path` (and the folder fsynced). On any error
+    the temporary file is removed and `path` is left as it was."""
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    try:
+        fd = os.open(target.parent, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

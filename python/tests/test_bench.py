@@ -1,0 +1,289 @@
+"""ChopperScape-Bench: the modes (one table, every surface), the protocol's seeds, reproducible results files,
+the statistics against hand-computed values, and refused results files."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import chopperscape
+from chopperscape import _core
+from chopperscape.bench import evaluate, protocol, report, results
+from chopperscape.bench.__main__ import main
+from chopperscape.learn import recipe as recipe_mod
+from chopperscape.learn import seeds as learn_seeds
+
+ROOT = Path(__file__).resolve().parents[2]
+RESULTS = ROOT / "docs" / "bench" / "results"
+MODEL = ROOT / "models" / "ppo-features.pt"
+
+
+# --- modes ------------------------------------------------------------------------------------------------------
+
+
+def test_modes_are_the_cores_table_and_each_has_a_gymnasium_id():
+    assert [m["name"] for m in chopperscape.MODES] == ["v0", "sticky-v0", "full-v0"]
+    assert chopperscape.MODES == _core.MODES
+    for m in chopperscape.MODES:
+        assert m["id"] in gym.registry
+        if m["name"] != "v0":
+            assert gym.spec(m["id"]).kwargs == {"mode": m["name"]}
+    assert gym.spec("ChopperScape-v0").kwargs == {}  # v0 keeps every option open, as before
+
+
+def _first_reward(env, **kw) -> float:
+    env.reset(seed=0)
+    return float(env.step(4, **kw)[1])
+
+
+@pytest.mark.parametrize("name", ["v0", "sticky-v0", "full-v0"])
+def test_mode_gives_the_same_rules_on_every_surface(name):
+    m = protocol.mode(name)
+    skip = int(m["options"].get("frame_skip", "1"))
+    env = chopperscape.ChopperScapeEnv(mode=name, obs_type="features")
+    made = gym.make(m["id"], obs_type="features")
+    envs = chopperscape.VectorEnv(2, mode=name, obs_type="features")
+    vec = gym.make_vec(m["id"], num_envs=2, vectorization_mode="vector_entry_point", obs_type="features")
+    for e in (env, made):
+        e.reset(seed=0)
+        assert e.step(4)[1] == skip  # +1 per underlying step
+    for v in (envs, vec):
+        v.reset(seed=0)
+        assert list(v.step(np.array([4, 4]))[1]) == [skip, skip]
+    # The same game: a mode equals its options given one by one.
+    explicit = chopperscape.ChopperScapeEnv(obs_type="features", **protocol.mode_options(name))
+    plain = {k: v for k, v in protocol.mode_options(name).items() if k != "mode"}
+    by_hand = chopperscape.ChopperScapeEnv(obs_type="features", **plain)
+    for e in (env, explicit, by_hand):
+        e.reset(seed=5)
+    for _ in range(300):
+        a = [e.step(1)[:4] for e in (env, explicit, by_hand)]
+        assert all(np.array_equal(a[0][0], x[0]) and a[0][1:] == x[1:] for x in a[1:])
+        if a[0][2]:
+            break
+
+
+def test_options_that_contradict_a_mode_are_refused_and_observation_options_are_free():
+    with pytest.raises(ValueError, match=r'mode "full-v0".*lives 2 != 3'):
+        gym.make("ChopperScape-Full-v0", lives=2)
+    with pytest.raises(ValueError, match=r"frame_skip 1 != 4"):
+        chopperscape.VectorEnv(2, mode="sticky-v0", frame_skip=1)
+    with pytest.raises(ValueError, match=r"bird_prob 0.02 != 0.01"):
+        chopperscape.ChopperScapeEnv(mode="v0", bird_prob=0.02)
+    with pytest.raises(ValueError, match="allowed None or one of v0, sticky-v0, full-v0"):
+        chopperscape.ChopperScapeEnv(mode="v9")
+    chopperscape.ChopperScapeEnv(mode="sticky-v0", frame_skip=4, obs_type="grayscale", obs_size=(84, 84))
+    gym.make("ChopperScape-v0", lives=3)  # the plain id stays as it was
+
+
+# --- protocol ---------------------------------------------------------------------------------------------------
+
+
+def test_protocol_is_the_held_out_evaluation():
+    assert protocol.eval_seeds() == range(1_000_000, 1_000_100)
+    assert (learn_seeds.EVAL_SEED, learn_seeds.EVAL_EPISODES) == (protocol.EVAL_SEED, protocol.EVAL_EPISODES)
+    assert gym.spec("ChopperScape-v0").max_episode_steps == protocol.MAX_EPISODE_STEPS
+
+
+def test_training_seeds_never_reach_the_evaluation_seeds():
+    # The training tools' seeds: `seed + i` for each of num_envs envs, for every preset and the default recipe.
+    for preset in [None, *recipe_mod.PRESETS]:
+        r = recipe_mod.Recipe() if preset is None else recipe_mod.Recipe(**recipe_mod.PRESETS[preset])
+        for seed in range(10):  # `--seeds 0-9`
+            protocol.check_training_seeds(r.seed + seed, r.num_envs)
+    protocol.check_training_seeds(0, 1_000_000)
+    protocol.check_training_seeds(1_000_100, 64)
+    for first, count in [(1_000_000, 1), (999_990, 64), (1_000_099, 1), (0, 2_000_000)]:
+        with pytest.raises(ValueError, match=r"overlap the evaluation seeds 1000000\.\.1000099"):
+            protocol.check_training_seeds(first, count)
+
+
+def test_declared_training_seeds_are_checked_and_recorded(capsys):
+    doc = evaluate.run("chopperscape.bench.examples:always_up", "v0", train_seeds=(0, 64))
+    assert doc["policy"]["train_seeds"] == [0, 64]
+    args = ["evaluate", "chopperscape.bench.examples:always_up", "--mode", "v0", "--train-seeds", "999999:2"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "overlap the evaluation seeds" in err[0]
+
+
+def test_a_model_trained_on_the_evaluation_seeds_is_refused(tmp_path):
+    torch = pytest.importorskip("torch")
+    payload = torch.load(MODEL, weights_only=True)
+    payload["recipe"]["seed"] = 999_990
+    bad = tmp_path / "leaky.pt"
+    torch.save(payload, bad)
+    with pytest.raises(ValueError, match=r"its training seeds 999990\.\.1000053 overlap"):
+        evaluate.load(str(bad), "v0")
+
+
+# --- results files ----------------------------------------------------------------------------------------------
+
+
+def test_the_same_policy_gives_the_same_results_twice(tmp_path, capsys):
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    for out in (a, b):
+        assert main(["evaluate", "random", "--mode", "sticky-v0", "--policy-seed", "3", "--out", str(out)]) == 0
+    da, db = results.load(a), results.load(b)
+    assert results.comparable(da) == results.comparable(db)
+    assert "created" in da["meta"]
+    other = evaluate.run("random", "sticky-v0", policy_seed=4)
+    assert other["episodes"] != da["episodes"]  # a policy seed is a run
+    assert [e["seed"] for e in da["episodes"]] == list(protocol.eval_seeds())
+    assert not list(tmp_path.glob(".*tmp"))
+
+
+def test_a_committed_row_reproduces():
+    doc = results.load(RESULTS / "full-v0.random.seed7.json")
+    again = evaluate.run("random", "full-v0", policy_seed=7)
+    assert results.comparable(again) == results.comparable(doc)
+
+
+def test_callable_and_onnx_policies(tmp_path):
+    doc = evaluate.run("chopperscape.bench.examples:always_up", "v0")
+    assert doc["policy"]["kind"] == "callable" and len(doc["policy"]["sha256"]) == 64
+    pytest.importorskip("onnxruntime")
+    onnx = evaluate.run(str(ROOT / "models" / "ppo-features.onnx"), "v0")
+    pt = evaluate.run(str(MODEL), "v0")
+    assert onnx["policy"]["kind"] == "onnx" and pt["policy"]["kind"] == "recipe"
+    assert onnx["episodes"] == pt["episodes"]  # the export acts as the model
+
+
+def test_an_sb3_zip_plays_the_mode_it_is_given(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    venv = ChopperScapeVecEnv(4, seed=0, mode="sticky-v0", obs_type="features")
+    model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
+    model.learn(64)
+    model.save(tmp_path / "tiny.zip")
+    doc = evaluate.run(str(tmp_path / "tiny.zip"), "sticky-v0", {"obs_type": "features"}, train_seeds=(0, 4))
+    assert doc["policy"]["kind"] == "sb3" and doc["policy"]["actions"] == "greedy"
+    assert doc["mode"]["name"] == "sticky-v0" and doc["policy"]["train_seeds"] == [0, 4]
+    again = evaluate.run(str(tmp_path / "tiny.zip"), "sticky-v0", {"obs_type": "features"}, train_seeds=(0, 4))
+    assert results.comparable(again) == results.comparable(doc)
+
+
+def test_atomic_write_leaves_the_old_file_on_failure(tmp_path, monkeypatch):
+    target = tmp_path / "r.json"
+    target.write_text("old")
+
+    def fail(*_):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(os, "replace", fail)
+    with pytest.raises(OSError):
+        results.write_atomic(target, "new")
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["r.json"]
+
+
+def _good() -> dict:
+    return json.loads((RESULTS / "v0.random.seed0.json").read_text())
+
+
+@pytest.mark.parametrize(
+    "damage, says",
+    [
+        (lambda d: "{not json", "not JSON"),
+        (lambda d: json.dumps(d)[:500], "not JSON"),
+        (lambda d: json.dumps({**d, "format": "x"}), "`format`"),
+        (lambda d: json.dumps({**d, "episodes": d["episodes"][:99]}), "`episodes` must hold 100"),
+        (lambda d: json.dumps({**d, "summary": {**d["summary"], "mean_return": 1e6}}), "`summary` does not match"),
+        (lambda d: json.dumps({**d, "protocol": {**d["protocol"], "episodes": 10}}), "`protocol`"),
+        (lambda d: json.dumps({**d, "mode": {**d["mode"], "name": "v7"}}), "unknown mode"),
+        (lambda d: json.dumps({**d, "policy": {**d["policy"], "train_seeds": [1_000_000, 4]}}), "overlap"),
+    ],
+)
+def test_a_malformed_results_file_is_refused_with_its_name(tmp_path, damage, says):
+    bad = tmp_path / "bad.json"
+    bad.write_text(damage(_good()))
+    cmd = [sys.executable, "-m", "chopperscape.bench", "report", str(RESULTS / "v0.heuristic.json"), str(bad)]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    assert done.returncode == 2
+    assert done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(bad) in lines[0] and says in lines[0], done.stderr
+
+
+# --- statistics -------------------------------------------------------------------------------------------------
+
+#: Two tasks of four runs: hand-computed below.
+TASKS = [np.array([0.1, 0.2, 0.3, 1.4]), np.array([0.5, 0.6, 0.9, 1.0])]
+
+
+def test_aggregates_match_hand_computed_values_and_rliables_definitions():
+    # mean of per-task means: (0.5 + 0.75) / 2; median of two per-task means = their mean too.
+    assert report.aggregate_mean(TASKS) == pytest.approx(0.625)
+    assert report.aggregate_median(TASKS) == pytest.approx(0.625)
+    # IQM pools 8 runs, drops the lowest 2 (0.1, 0.2) and the highest 2 (1.0, 1.4): mean(0.3, 0.5, 0.6, 0.9).
+    assert report.aggregate_iqm(TASKS) == pytest.approx(0.575)
+    # Optimality gap at 1: 1 - mean(min(x, 1)) = 1 - (0.1+0.2+0.3+1+0.5+0.6+0.9+1)/8.
+    assert report.aggregate_optimality_gap(TASKS) == pytest.approx(1 - 4.6 / 8)
+    # rliable.metrics, written out on the (runs x tasks) matrix.
+    m = np.stack(TASKS, axis=1)
+    assert report.aggregate_mean(TASKS) == pytest.approx(np.mean(np.mean(m, axis=0)))
+    assert report.aggregate_median(TASKS) == pytest.approx(np.median(np.mean(m, axis=0)))
+    pooled = np.sort(m, axis=None)  # scipy.stats.trim_mean(m, 0.25, axis=None): cut int(0.25 n) from each end
+    cut = int(0.25 * pooled.size)
+    assert report.aggregate_iqm(TASKS) == pytest.approx(pooled[cut : pooled.size - cut].mean())
+    three = TASKS + [np.array([0.0, 0.0, 0.1, 0.1])]
+    assert report.aggregate_median(three) == pytest.approx(0.5)  # the median of 0.5, 0.75, 0.05
+    # The performance profile: fraction of runs above tau, averaged over tasks.
+    prof = report.performance_profile(TASKS, np.array([0.0, 0.25, 0.95, 2.0]))
+    assert prof.tolist() == pytest.approx([1.0, (0.5 + 1.0) / 2, (0.25 + 0.25) / 2, 0.0])
+
+
+def test_bootstrap_intervals():
+    est = report.interval_estimates(TASKS, resamples=5000)
+    for name, a in est.items():
+        assert a["low"] <= a["point"] <= a["high"], name
+    # Constant runs: no spread at all.
+    flat = report.interval_estimates([np.full(5, 0.4)], resamples=500)
+    assert all(a["low"] == a["high"] == pytest.approx(a["point"]) for a in flat.values())
+    # With one task the stratified bootstrap is the plain one over runs (learn.seeds.bootstrap_ci, same draws).
+    x = np.array([0.1, 0.5, 0.2, 0.9, 0.4, 0.45, 0.3, 0.8, 0.7, 0.05])
+    lo, hi = learn_seeds.bootstrap_ci(x, resamples=4000, seed=0)
+    one = report.interval_estimates([x], resamples=4000, seed=0)["iqm"]
+    assert (one["low"], one["high"]) == pytest.approx((lo, hi))
+    # Reproducible: a seeded generator.
+    assert report.interval_estimates(TASKS, resamples=800) == report.interval_estimates(TASKS, resamples=800)
+
+
+def test_report_over_the_committed_results_and_its_plots(tmp_path):
+    files = sorted(str(p) for p in RESULTS.glob("*.json"))
+    assert len(files) >= 34
+    assert main(["report", *files, "--plots", str(tmp_path), "--format", "svg", "--resamples", "500"]) == 0
+    assert (tmp_path / "intervals.svg").stat().st_size > 0 and (tmp_path / "profile.svg").stat().st_size > 0
+    rows = report.report(report.load_all(files), resamples=500)
+    runs = {r["policy"]: r["runs"] for r in rows}
+    for m in ("v0", "sticky-v0", "full-v0"):
+        assert runs[f"random @ {m}"] == {m: 10}
+        assert runs[f"heuristic @ {m}"] == {m: 1}
+
+
+def test_the_leaderboard_page_shows_the_committed_results():
+    page = (ROOT / "docs" / "site" / "bench.md").read_text()
+    files = sorted(str(p) for p in RESULTS.glob("*.json"))
+    for row in report.markdown(report.report(report.load_all(files))).splitlines()[2:]:
+        assert row in page, f"docs/site/bench.md lacks the row (regenerate it, see the page):\n{row}"
+
+
+@pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md", "docs/site/environment.md"])
+def test_the_modes_tables_of_the_docs_are_the_cores(page):
+    text = (ROOT / page).read_text()
+    for m in chopperscape.MODES:
+        line = next((x for x in text.splitlines() if x.startswith(f"| `{m['name']}` | `{m['id']}` |")), None)
+        assert line is not None, f"{page} has no row for mode {m['name']}"
+        options = line.split("|")[3]
+        listed = [o.strip(" `") for o in options.split(",")] if m["options"] else []
+        assert listed == [f"{k}={v}" for k, v in m["options"].items()] or (not listed and "(none)" in options)
