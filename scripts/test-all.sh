@@ -16,8 +16,14 @@ log="$(mktemp)"
 start=$SECONDS
 failed=()
 times=()
+# CPU seconds (user + system) of this script's finished children and theirs: a part's CPU time barely changes when
+# other work shares the machine, where its wall time does (fields 16 and 17 of /proc/PID/stat, in clock ticks).
+tick=$(getconf CLK_TCK 2>/dev/null || echo 100)
+cpu() { local st; read -r -a st <"/proc/$$/stat"; echo $(((st[15] + st[16]) / tick)); }
+cpu_start=$(cpu)
 # ffmpeg before the Rust tests: the CLI's .mp4 test checks real files when ffmpeg is there.
 part_start=$SECONDS
+part_cpu=$(cpu)
 if ! { apt_install ffmpeg || skip "the .mp4 checks against ffmpeg (ffmpeg could not be installed)"; } 2>&1 \
   | tee -a "$log"; then
   failed+=("setup")
@@ -31,27 +37,31 @@ trap 'rm -f "$log"; rm -rf "$prep_dir"' EXIT
 prep_tools=$!
 (bash scripts/test-python.sh --install-only && bash scripts/test-dist.sh --install-only) >"$prep_dir/venvs.log" 2>&1 &
 prep_venvs=$!
-times+=("setup $((SECONDS - part_start))")
+times+=("setup $((SECONDS - part_start)) $(($(cpu) - part_cpu))")
 for part in rust cli python web dist; do
   part_start=$SECONDS
+  part_cpu=$(cpu)
   if [ "$part" = cli ]; then  # the installs, before the first part that needs them
     for job in "tools:$prep_tools" "venvs:$prep_venvs"; do
       wait "${job#*:}" || { cat "$prep_dir/${job%%:*}.log"; say "the background installs (${job%%:*}) failed"; }
       grep -E '^(skipped|FAILED)' "$prep_dir/${job%%:*}.log" || true
     done 2>&1 | tee -a "$log"
-    times+=("wait $((SECONDS - part_start))")
+    times+=("wait $((SECONDS - part_start)) $(($(cpu) - part_cpu))")
     part_start=$SECONDS
+    part_cpu=$(cpu)
   fi
   bash "scripts/test-$part.sh" 2>&1 | tee -a "$log" || failed+=("$part")
-  times+=("$part $((SECONDS - part_start))")
+  times+=("$part $((SECONDS - part_start)) $(($(cpu) - part_cpu))")
 done
 
 # The cost of each part, so that a slow part is seen the day it becomes slow (docs/testing.md keeps the table).
+# "wait" is the time spent waiting for the background installs (their CPU time is counted there).
 for t in "${times[@]}"; do
-  set -- $t
-  printf 'time: %-6s %4d s\n' "$1" "$2"
+  read -r name wall cpu_s <<<"$t"
+  printf 'time: %-6s %5d s wall %6d s CPU\n' "$name" "$wall" "$cpu_s"
 done
-printf 'time: %-6s %4d s (%d min)\n' total $((SECONDS - start)) $(((SECONDS - start + 59) / 60))
+printf 'time: %-6s %5d s wall %6d s CPU (%d min)\n' total $((SECONDS - start)) $(($(cpu) - cpu_start)) \
+  $(((SECONDS - start + 59) / 60))
 # What a local run could not check (CI=true fails instead), repeated here so that it is not lost in the output.
 grep -E '^skipped: ' "$log" | sed 's/^/not checked here: /' || true
 
