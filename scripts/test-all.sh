@@ -42,10 +42,12 @@ for part in rust cli python web dist; do
   part_start=$SECONDS
   part_cpu=$(cpu)
   if [ "$part" = cli ]; then  # the installs, before the first part that needs them
+    # In this shell, not a pipeline's subshell: only the shell that started a job can wait for it.
     for job in "tools:$prep_tools" "venvs:$prep_venvs"; do
       wait "${job#*:}" || { cat "$prep_dir/${job%%:*}.log"; say "the background installs (${job%%:*}) failed"; }
       grep -E '^(skipped|FAILED)' "$prep_dir/${job%%:*}.log" || true
-    done 2>&1 | tee -a "$log"
+    done >"$prep_dir/wait.log" 2>&1
+    tee -a "$log" <"$prep_dir/wait.log"
     times+=("wait $((SECONDS - part_start)) $(($(cpu) - part_cpu))")
     part_start=$SECONDS
     part_cpu=$(cpu)
