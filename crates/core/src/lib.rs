@@ -53,7 +53,9 @@ mod spaces;
 mod world;
 
 pub use action::{ACTION_MEANINGS, Action, N_ACTIONS};
-pub use config::{BirdFuelCollision, Config, HudStyle, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, option_info};
+pub use config::{
+    BirdFuelCollision, CliFlag, Config, HudStyle, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, OptionKind, OptionValue, option_info,
+};
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;
