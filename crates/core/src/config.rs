@@ -737,9 +737,15 @@ mod tests {
         let err = Config::default().set("max_fuel", " 0 ").unwrap_err().to_string();
         assert_eq!(err, "invalid value 0 for option `max_fuel`: allowed an integer in 1..=1000000");
         let err = Config::default().set("obs_size", "84xabc").unwrap_err().to_string();
-        assert_eq!(err, "invalid value abc for option `obs_size`: allowed HxW or H,W with each in 8..=4096, for example 84x84");
+        assert_eq!(
+            err,
+            "invalid value abc for option `obs_size`: allowed HxW or H,W with each in 8..=4096, for example 84x84"
+        );
         let err = "rgba".parse::<ObsType>().unwrap_err().to_string();
-        assert_eq!(err, "invalid value rgba for option `obs_type`: allowed one of \"rgb\", \"rgb_float\", \"grayscale\", \"features\"");
+        assert_eq!(
+            err,
+            "invalid value rgba for option `obs_type`: allowed one of \"rgb\", \"rgb_float\", \"grayscale\", \"features\""
+        );
     }
 
     /// The defaults in the table are the constants of the v0 game (`consts`), and each option's kind is its type.
