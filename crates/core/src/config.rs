@@ -1,7 +1,7 @@
 //! Options of the environment: the v0 rules by default, the tutorial's extensions and the
 //! observation settings as opt-ins. A plain struct with `Default`, validated once.
 //!
-//! Every option is declared once, in the table of the [`options!`] invocation below: its field and Rust type, its
+//! Every option is declared once, in the table of the `options!` invocation below: its field and Rust type, its
 //! default (as text), what it allows (a range or a set, from which the words of its errors come), its one-line
 //! doc, whether it is a rule or an observation setting, its command-line flag and whether the web page sets it.
 //! The macro generates from that table the [`Config`] struct, `Config::default()`, [`OPTIONS`] (what the CLI's
