@@ -16,6 +16,8 @@ from . import _core
 CORE_OPTIONS: tuple[str, ...] = tuple(_core.OPTION_NAMES)
 #: The core's rules options (`OptionInfo::rule`): what decides the game, as opposed to how it is observed.
 RULE_OPTIONS: tuple[str, ...] = tuple(o["name"] for o in _core.OPTIONS if o["rule"])
+#: The core's observation settings: how the game is observed and drawn, which an action log does not record.
+OBSERVATION_OPTIONS: tuple[str, ...] = tuple(o["name"] for o in _core.OPTIONS if not o["rule"])
 #: Options the Python environments add to the core's (bools).
 PYTHON_BOOL_OPTIONS: tuple[str, ...] = ("keep_dim",)
 #: What `--option` takes by default: the options of `gymnasium.make("ChopperScape-v0", ...)`.

@@ -8,6 +8,7 @@ default or a range changed in one place and not the other fails here.
 from __future__ import annotations
 
 import ast
+import pathlib
 import re
 
 import gymnasium as gym
@@ -112,3 +113,72 @@ def test_a_changed_default_or_range_is_noticed():
     assert mentions("`(H, W)`, each in 8..=4096", "8..=4096")
     with pytest.raises(AssertionError, match="two rows"):
         table_rows("| `lives` | 1 | 1..=1000 |\n| `lives` | 2 | 1..=1000 |")
+
+
+# --- The one table: `options!` in crates/core/src/config.rs declares each option once; every surface derives. ---
+
+CONFIG_RS = pathlib.Path(__file__).resolve().parents[2] / "crates" / "core" / "src" / "config.rs"
+ROW = re.compile(
+    r"^    (?P<name>\w+): (?P<type>[^{\n]+?) \{\n"
+    r"\s+default: \"(?P<default>[^\"]*)\",\n"
+    r"\s+allowed: (?P<allowed>.+?),\n"
+    r"\s+doc: \"(?P<doc>(?:[^\"\\]|\\.)*)\",\n"
+    r"\s+role: (?P<role>rule|observation),\n"
+    r"\s+flag: (?P<flag>none|\(\"[\w-]+\", \"[^\"]+\"\)),\n"
+    r"\s+page: (?P<page>true|false),\n"
+    r"    \},$",
+    re.M | re.S,
+)
+#: The Python type of each Rust type of the table, as `_core.option_value` gives it.
+PY_TYPES = {"u32": int, "f64": float, "bool": bool, "(u32, u32)": tuple, "Option<u32>": (int, type(None))}
+
+
+def rust_table() -> list[dict[str, str]]:
+    """The rows of the `options!` table, read from the Rust source (skipped where the tree is not here)."""
+    if not CONFIG_RS.is_file():
+        pytest.skip("the Rust sources are not next to the tests")
+    source = CONFIG_RS.read_text(encoding="utf-8")
+    table = source[source.index("\noptions! {\n") :]
+    table = table[: table.index("\n}\n")]
+    rows = [m.groupdict() for m in ROW.finditer(table)]
+    assert len(rows) == table.count(" {\n        default:"), "a row of the table is not in the expected form"
+    for row in rows:
+        row["doc"] = re.sub(r"\\\n\s*", "", row["doc"]).replace('\\"', '"')
+    return rows
+
+
+def test_core_options_are_the_rust_table():
+    """`_core.OPTIONS` is the table of `options!`, row for row: name, default, doc and rule as written there."""
+    rows = rust_table()
+    assert [r["name"] for r in rows] == [o["name"] for o in _core.OPTIONS]
+    for row, o in zip(rows, _core.OPTIONS):
+        assert (row["default"], row["doc"], row["role"] == "rule") == (o["default"], o["doc"], o["rule"]), o["name"]
+
+
+def test_each_option_value_has_the_tables_rust_type():
+    for row in rust_table():
+        value = _core.option_value(row["name"], row["default"])
+        expected = PY_TYPES.get(row["type"], str)  # the enums are their names
+        assert isinstance(value, expected) and (expected is bool or not isinstance(value, bool)), row["name"]
+
+
+def test_the_python_lists_of_options_derive_from_the_core():
+    from chopperscape import _cli
+
+    rows = rust_table()
+    assert _cli.CORE_OPTIONS == tuple(r["name"] for r in rows)
+    assert _cli.RULE_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "rule")
+    assert _cli.OBSERVATION_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "observation")
+    assert set(_cli.ENV_OPTIONS) == set(_cli.CORE_OPTIONS) | set(_cli.PYTHON_BOOL_OPTIONS)
+
+
+def test_python_keywords_reach_every_option_of_the_table():
+    """Every option of the table is a keyword of the Python config (`Config::set` through `_core`), defaults
+    included; `max_episode_steps` belongs to `gymnasium.make`."""
+    for row in rust_table():
+        if row["name"] == "max_episode_steps":
+            continue
+        value = _core.option_value(row["name"], row["default"])
+        options = {row["name"]: value} if row["name"] == "obs_type" else {"obs_type": "features", row["name"]: value}
+        env = ChopperScapeEnv(**options)
+        env.close()

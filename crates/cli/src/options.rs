@@ -5,8 +5,8 @@
 //! error (exit code 2) and the core's message naming the option and its allowed range.
 
 use anyhow::{Context, Result};
-use chopperscape::{Config, option_info};
-use clap::Args;
+use chopperscape::{CliFlag, Config, OPTIONS, OptionInfo, option_info};
+use clap::{Arg, ArgAction, ArgMatches, Command};
 
 /// A clap value parser that accepts exactly what `Config::set(name, value)` accepts.
 fn option(name: &'static str) -> impl Fn(&str) -> Result<String, String> + Clone + Send + Sync + 'static {
@@ -23,91 +23,66 @@ fn help(name: &str) -> String {
     format!("{}: {} [default: {}]", o.doc, o.allowed, o.default)
 }
 
-/// The options of SPEC.md ("Options beyond the tutorial"); each defaults to the v0 rules. Each flag's help is
-/// [`help`] of its option.
-#[derive(Args, Debug, Clone, Default)]
-#[command(next_help_heading = "Game options (SPEC.md; the defaults are the v0 rules)")]
+/// The heading of the game options in the help.
+const HEADING: &str = "Game options (SPEC.md; the defaults are the v0 rules)";
+
+/// The options of SPEC.md that have a flag in the core's table ([`chopperscape::OptionInfo::flag`]): the rules
+/// options and `--hud-style`; each defaults to the v0 rules. The flags are built from the table at run time
+/// ([`GameOptions::augment_args`]), each with [`help`] of its option, so an option added to the table is a flag
+/// here with nothing written by hand.
+#[derive(Debug, Clone, Default)]
 pub struct GameOptions {
-    #[arg(long, help = help("lives"), value_name = "L", allow_negative_numbers = true, value_parser = option("lives"))]
-    pub lives: Option<String>,
-    #[arg(
-        long,
-        help = help("alien_prob"),
-        value_name = "P",
-        allow_negative_numbers = true,
-        value_parser = option("alien_prob")
-    )]
-    pub aliens: Option<String>,
-    #[arg(
-        long,
-        help = help("bird_fuel_collision"),
-        value_name = "pass|destroy",
-        value_parser = option("bird_fuel_collision")
-    )]
-    pub bird_fuel_collision: Option<String>,
-    #[arg(
-        long,
-        help = help("frame_skip"),
-        value_name = "K",
-        allow_negative_numbers = true,
-        value_parser = option("frame_skip")
-    )]
-    pub frame_skip: Option<String>,
-    #[arg(
-        long,
-        help = help("sticky_prob"),
-        value_name = "P",
-        allow_negative_numbers = true,
-        value_parser = option("sticky_prob")
-    )]
-    pub sticky: Option<String>,
-    #[arg(
-        long,
-        help = help("bird_prob"),
-        value_name = "P",
-        allow_negative_numbers = true,
-        value_parser = option("bird_prob")
-    )]
-    pub bird_prob: Option<String>,
-    #[arg(
-        long,
-        help = help("fuel_prob"),
-        value_name = "P",
-        allow_negative_numbers = true,
-        value_parser = option("fuel_prob")
-    )]
-    pub fuel_prob: Option<String>,
-    #[arg(long, help = help("max_fuel"), value_name = "N", allow_negative_numbers = true, value_parser = option("max_fuel"))]
-    pub max_fuel: Option<String>,
-    #[arg(
-        long,
-        help = help("max_episode_steps"),
-        value_name = "N|none",
-        allow_negative_numbers = true,
-        value_parser = option("max_episode_steps")
-    )]
-    pub max_episode_steps: Option<String>,
-    #[arg(long, help = help("hud_style"), value_name = "auto|text|gauge", value_parser = option("hud_style"))]
-    pub hud_style: Option<String>,
+    /// The flags given, as `(option, value)`, in table order.
+    values: Vec<(&'static OptionInfo, String)>,
+}
+
+/// The options of the core's table that have a flag and that `keep` keeps, in table order.
+fn flagged(keep: fn(&OptionInfo) -> bool) -> impl Iterator<Item = (&'static OptionInfo, CliFlag)> {
+    OPTIONS.iter().filter(move |o| keep(o)).filter_map(|o| o.flag.map(|f| (o, f)))
+}
+
+/// Every option with a flag: what the commands that play take.
+fn every(_: &OptionInfo) -> bool {
+    true
+}
+
+/// The observation settings with a flag (`--hud-style`): how frames are drawn, which an action log does not fix.
+fn drawing(o: &OptionInfo) -> bool {
+    !o.rule
+}
+
+/// Reads the flags of the options `keep` keeps from `matches` into `values`, in table order.
+fn read(values: &mut Vec<(&'static OptionInfo, String)>, matches: &ArgMatches, keep: fn(&OptionInfo) -> bool) {
+    for (o, _) in flagged(keep) {
+        if let Some(value) = matches.get_one::<String>(o.name) {
+            values.retain(|(given, _)| given.name != o.name);
+            values.push((o, value.clone()));
+        }
+    }
+    values.sort_by_key(|(o, _)| OPTIONS.iter().position(|x| x.name == o.name));
+}
+
+/// The clap argument of option `o`, whose flag is `flag`: its id is the option's name.
+pub fn arg(o: &'static OptionInfo, flag: CliFlag) -> Arg {
+    Arg::new(o.name)
+        .long(flag.long)
+        .help(help(o.name))
+        .value_name(flag.value_name)
+        .allow_negative_numbers(o.kind.is_numeric())
+        .value_parser(option(o.name))
+        .action(ArgAction::Set)
+        .required(false)
 }
 
 impl GameOptions {
+    /// The value given for option `name`, if its flag was given.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.values.iter().find(|(o, _)| o.name == name).map(|(_, v)| v.as_str())
+    }
+
     /// The rules flags that were given, as `(Config::set name, value)` (`--hud-style` is not one).
     pub fn given(&self) -> Vec<(&'static str, &str)> {
-        [
-            ("lives", &self.lives),
-            ("alien_prob", &self.aliens),
-            ("bird_fuel_collision", &self.bird_fuel_collision),
-            ("frame_skip", &self.frame_skip),
-            ("sticky_prob", &self.sticky),
-            ("bird_prob", &self.bird_prob),
-            ("fuel_prob", &self.fuel_prob),
-            ("max_fuel", &self.max_fuel),
-            ("max_episode_steps", &self.max_episode_steps),
-        ]
-        .into_iter()
-        .filter_map(|(name, v)| v.as_deref().map(|v| (name, v)))
-        .collect()
+        self.values.iter().filter(|(o, _)| o.rule).map(|(o, v)| (o.name, v.as_str())).collect()
     }
 
     /// `base` with these options applied, `--hud-style` included.
@@ -115,64 +90,182 @@ impl GameOptions {
     /// # Errors
     /// A value `Config::set` refuses (already checked while parsing, so only in theory).
     pub fn apply(&self, mut base: Config) -> Result<Config> {
-        for (name, value) in self.given().into_iter().chain(self.hud_style.as_deref().map(|v| ("hud_style", v))) {
-            base.set(name, value).with_context(|| format!("option {name}"))?;
+        for (o, value) in &self.values {
+            base.set(o.name, value).with_context(|| format!("option {}", o.name))?;
         }
         Ok(base)
+    }
+}
+
+impl clap::FromArgMatches for GameOptions {
+    fn from_arg_matches(matches: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut options = GameOptions::default();
+        options.update_from_arg_matches(matches)?;
+        Ok(options)
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
+        read(&mut self.values, matches, every);
+        Ok(())
+    }
+}
+
+impl clap::Args for GameOptions {
+    fn augment_args(cmd: Command) -> Command {
+        flagged(every).fold(cmd.next_help_heading(HEADING), |cmd, (o, flag)| cmd.arg(arg(o, flag)))
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        GameOptions::augment_args(cmd)
+    }
+}
+
+/// The flags of the observation settings that have one (`--hud-style`): what `replay` may change of an action
+/// log's config, which fixes the rules. Built from the core's table as [`GameOptions`] is.
+#[derive(Debug, Clone, Default)]
+pub struct DrawOptions(GameOptions);
+
+impl DrawOptions {
+    /// `base` with these options applied.
+    ///
+    /// # Errors
+    /// A value `Config::set` refuses (already checked while parsing, so only in theory).
+    pub fn apply(&self, base: Config) -> Result<Config> {
+        self.0.apply(base)
+    }
+}
+
+impl clap::FromArgMatches for DrawOptions {
+    fn from_arg_matches(matches: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut options = DrawOptions::default();
+        options.update_from_arg_matches(matches)?;
+        Ok(options)
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
+        read(&mut self.0.values, matches, drawing);
+        Ok(())
+    }
+}
+
+impl clap::Args for DrawOptions {
+    fn augment_args(cmd: Command) -> Command {
+        flagged(drawing).fold(cmd, |cmd, (o, flag)| cmd.arg(arg(o, flag)))
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        DrawOptions::augment_args(cmd)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::{FromArgMatches, Parser};
+
+    #[derive(Parser, Debug)]
+    struct Cli {
+        #[command(flatten)]
+        options: GameOptions,
+    }
+
+    fn parse(args: &[&str]) -> Result<GameOptions, clap::Error> {
+        Cli::try_parse_from(std::iter::once("t").chain(args.iter().copied())).map(|cli| cli.options)
+    }
 
     #[test]
     fn hud_style_is_applied_but_is_not_a_rule() {
-        let options =
-            GameOptions { hud_style: Some("gauge".into()), lives: Some("2".into()), ..GameOptions::default() };
+        let options = parse(&["--hud-style", "gauge", "--lives", "2"]).unwrap();
         assert_eq!(options.given(), [("lives", "2")]);
+        assert_eq!(options.get("hud_style"), Some("gauge"));
         let c = options.apply(Config::default()).unwrap();
         assert_eq!((c.hud_style, c.lives), (chopperscape::HudStyle::Gauge, 2));
         assert!(!chopperscape_actionlog::rule_values(&c).contains_key("hud_style"));
     }
 
+    /// Walks the core's table: every option with a flag is a flag of the commands that play, with the table's
+    /// long name, value name and help, and its value reaches `Config::set` under the option's name; no other
+    /// flag is there. Nothing here names an option.
     #[test]
-    fn the_rules_flags_are_the_rules_options() {
-        let v = Some("1".to_string());
-        let all = GameOptions {
-            lives: v.clone(),
-            aliens: v.clone(),
-            bird_fuel_collision: v.clone(),
-            frame_skip: v.clone(),
-            sticky: v.clone(),
-            bird_prob: v.clone(),
-            fuel_prob: v.clone(),
-            max_fuel: v.clone(),
-            max_episode_steps: v.clone(),
-            hud_style: v,
-        };
-        let given: std::collections::BTreeSet<&str> = all.given().into_iter().map(|(name, _)| name).collect();
-        let rules: std::collections::BTreeSet<&str> =
-            chopperscape::OPTIONS.iter().filter(|o| o.rule).map(|o| o.name).collect();
-        assert_eq!(given, rules);
+    fn every_flag_is_the_tables() {
+        use clap::Args as _;
+        let cmd = GameOptions::augment_args(Command::new("t"));
+        let args: Vec<&Arg> = cmd.get_arguments().collect();
+        let table: Vec<(&OptionInfo, CliFlag)> = OPTIONS.iter().filter_map(|o| o.flag.map(|f| (o, f))).collect();
+        assert_eq!(args.len(), table.len(), "one flag per option with a flag in the table");
+        for (arg, (o, flag)) in args.iter().zip(&table) {
+            assert_eq!(arg.get_id().as_str(), o.name);
+            assert_eq!(arg.get_long(), Some(flag.long), "{}", o.name);
+            assert_eq!(arg.get_value_names().map(|v| v[0].as_str()), Some(flag.value_name), "{}", o.name);
+            let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+            assert_eq!(help, format!("{}: {} [default: {}]", o.doc, o.allowed, o.default), "{}", o.name);
+            assert_eq!(arg.get_help_heading(), Some(HEADING), "{}", o.name);
+            // The default given as a flag sets the option to its default; a value it refuses is a usage error.
+            let long = format!("--{}", flag.long);
+            let options = parse(&[&long, o.default]).unwrap_or_else(|e| panic!("{long} {}: {e}", o.default));
+            assert_eq!(options.get(o.name), Some(o.default));
+            assert_eq!(options.given().len(), usize::from(o.rule), "{long} is a rule flag iff a rule");
+            let mut c = Config::features();
+            c.set(o.name, "1").ok();
+            let applied = options.apply(c.clone()).unwrap();
+            assert_eq!(applied.get(o.name).as_deref(), Some(o.default), "{long}");
+            let err = parse(&[&long, "nonsense"]).unwrap_err();
+            assert_eq!(err.kind(), clap::error::ErrorKind::ValueValidation, "{long}");
+            assert!(err.to_string().contains(o.allowed), "{long}: {err}");
+            if o.kind.is_numeric() {
+                assert!(parse(&[&long, "-1"]).unwrap_err().to_string().contains(o.allowed), "{long} -1");
+            }
+        }
+    }
+
+    /// The flags users know, under the names and value names they had before the table made them.
+    #[test]
+    fn the_flags_keep_their_names() {
+        use clap::Args as _;
+        let cmd = GameOptions::augment_args(Command::new("t"));
+        let mut flags: Vec<(String, String)> = cmd
+            .get_arguments()
+            .map(|a| (a.get_long().unwrap().to_string(), a.get_value_names().unwrap()[0].to_string()))
+            .collect();
+        flags.sort();
+        let expected = [
+            ("aliens", "P"),
+            ("bird-fuel-collision", "pass|destroy"),
+            ("bird-prob", "P"),
+            ("frame-skip", "K"),
+            ("fuel-prob", "P"),
+            ("hud-style", "auto|text|gauge"),
+            ("lives", "L"),
+            ("max-episode-steps", "N|none"),
+            ("max-fuel", "N"),
+            ("sticky", "P"),
+        ];
+        assert_eq!(flags, expected.map(|(a, b)| (a.to_string(), b.to_string())));
     }
 
     #[test]
-    fn every_flag_help_is_the_core_description() {
-        use clap::Args as _;
-        let cmd = GameOptions::augment_args(clap::Command::new("t"));
-        let mut seen = 0;
-        for arg in cmd.get_arguments() {
-            let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
-            let name = match arg.get_id().as_str() {
-                "aliens" => "alien_prob",
-                "sticky" => "sticky_prob",
-                id => id,
-            };
-            let o = option_info(name).unwrap_or_else(|| panic!("flag {name} is not a core option"));
-            assert_eq!(help, format!("{}: {} [default: {}]", o.doc, o.allowed, o.default));
-            seen += 1;
+    fn the_rules_flags_are_the_rules_options() {
+        let mut args = Vec::new();
+        for o in OPTIONS.iter().filter(|o| o.flag.is_some()) {
+            args.push(format!("--{}", o.flag.unwrap().long));
+            args.push(o.default.to_string());
         }
-        assert_eq!(seen, 10);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let all = parse(&args).unwrap();
+        let given: std::collections::BTreeSet<&str> = all.given().into_iter().map(|(name, _)| name).collect();
+        let rules: std::collections::BTreeSet<&str> = OPTIONS.iter().filter(|o| o.rule).map(|o| o.name).collect();
+        assert_eq!(given, rules, "every rules option has a flag");
+    }
+
+    #[test]
+    fn replay_takes_the_drawing_flags_only() {
+        use clap::Args as _;
+        let cmd = DrawOptions::augment_args(Command::new("t"));
+        let ids: Vec<&str> = cmd.get_arguments().map(|a| a.get_id().as_str()).collect();
+        let drawing: Vec<&str> = OPTIONS.iter().filter(|o| !o.rule && o.flag.is_some()).map(|o| o.name).collect();
+        assert_eq!(ids, drawing);
+        let matches = cmd.try_get_matches_from(["t", "--hud-style", "text"]).unwrap();
+        let draw = DrawOptions::from_arg_matches(&matches).unwrap();
+        assert_eq!(draw.apply(Config::default()).unwrap().hud_style, chopperscape::HudStyle::Text);
     }
 }

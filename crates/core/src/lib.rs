@@ -4,8 +4,9 @@
 //! I/O, windows or Python, so it builds for `wasm32-unknown-unknown` unchanged.
 //!
 //! # How the types relate
-//! - [`Config`] holds every option (the v0 rules by default); it is validated once. [`OPTIONS`] describes each
-//!   option once: its default, what it allows, and whether it is a rule.
+//! - [`Config`] holds every option (the v0 rules by default); it is validated once. Each option is declared once,
+//!   in the table of `config.rs`, from which [`Config`] and [`OPTIONS`] are generated: its default, what it
+//!   allows, whether it is a rule, its command-line flag and whether the web page sets it.
 //! - [`Game`] is the rules: a [`World`] (every entity, fuel, score, lives), the env's own generator
 //!   ([`Rng`]), and `reset` / `step` that change the world. Pure and allocation-free per step.
 //! - [`ChopperScape`] is the Gymnasium-shaped environment ([`Env`]): a game plus the observation pipeline
@@ -54,7 +55,10 @@ mod spaces;
 mod world;
 
 pub use action::{ACTION_MEANINGS, Action, N_ACTIONS};
-pub use config::{BirdFuelCollision, Config, HudStyle, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, option_info};
+pub use config::{
+    BirdFuelCollision, CliFlag, Config, HudStyle, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, OptionKind, OptionValue,
+    option_info,
+};
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;

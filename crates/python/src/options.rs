@@ -1,7 +1,7 @@
 //! Keyword options (a Python dict) to a [`Config`], through [`Config::set`] so the rules for every value
 //! live in the core.
 
-use chopperscape::Config;
+use chopperscape::{Config, OptionKind, OptionValue, option_info};
 use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -34,11 +34,12 @@ pub(crate) fn config_from(options: Option<&Bound<'_, PyDict>>) -> PyResult<Confi
         if name == "mode" {
             continue;
         }
-        if name == "obs_size" && !value.is_instance_of::<PyString>() {
-            set_obs_size(&mut config, &value)?;
+        let kind = option_info(&name).map(|o| o.kind);
+        if kind == Some(OptionKind::Size) && !value.is_instance_of::<PyString>() {
+            set_size(&mut config, &name, &value)?;
             continue;
         }
-        let text = option_text(&name, &value)?;
+        let text = option_text(&name, kind, &value)?;
         config.set(&name, &text).map_err(config_error)?;
     }
     if let Some(mode) = mode {
@@ -95,12 +96,12 @@ pub(crate) fn mode_table(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     Ok(table)
 }
 
-/// `obs_size` from a Python value: a tuple, list or array of two ints.
-fn set_obs_size(config: &mut Config, value: &Bound<'_, PyAny>) -> PyResult<()> {
+/// A size option (`obs_size`) from a Python value: a tuple, list or array of two ints.
+fn set_size(config: &mut Config, name: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
     let refused = || {
         let repr = value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
         PyValueError::new_err(format!(
-            "invalid value {repr} for option `obs_size`: allowed a tuple (height, width) of positive ints, each in \
+            "invalid value {repr} for option `{name}`: allowed a tuple (height, width) of positive ints, each in \
              8..=4096, for example (84, 84)"
         ))
     };
@@ -108,17 +109,17 @@ fn set_obs_size(config: &mut Config, value: &Bound<'_, PyAny>) -> PyResult<()> {
     let [h, w] = items.as_slice() else { return Err(refused()) };
     let int = |v: &Bound<'_, PyAny>| if v.is_instance_of::<PyBool>() { None } else { v.extract::<u32>().ok() };
     let (Some(h), Some(w)) = (int(h), int(w)) else { return Err(refused()) };
-    config.set("obs_size", &format!("{h}x{w}")).map_err(|_| refused())
+    config.set(name, &format!("{h}x{w}")).map_err(|_| refused())
 }
 
-/// The textual form of one option's Python value.
-fn option_text(name: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
-    if name == "hud" {
+/// The textual form of one option's Python value (`kind`: the option's, `None` for an unknown name).
+fn option_text(name: &str, kind: Option<OptionKind>, value: &Bound<'_, PyAny>) -> PyResult<String> {
+    if kind == Some(OptionKind::Bool) {
         // A bool option takes bools only (numpy's too): "False" or 0 would silently mean something else.
         return match value.extract::<bool>() {
             Ok(b) => Ok(if b { "true" } else { "false" }.into()),
             Err(_) => Err(PyValueError::new_err(format!(
-                "invalid value {} for option `hud`: allowed True or False",
+                "invalid value {} for option `{name}`: allowed True or False",
                 value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string())
             ))),
         };
@@ -130,7 +131,7 @@ fn option_text(name: &str, value: &Bound<'_, PyAny>) -> PyResult<String> {
         return Ok(s.to_string());
     }
     if value.is_instance_of::<PyBool>() {
-        // A bool anywhere but `hud` is refused by the option's own parser, naming the option.
+        // A bool anywhere but a bool option is refused by the option's own parser, naming the option.
         return Ok(if value.is_truthy()? { "true" } else { "false" }.into());
     }
     Ok(value.str()?.to_string())
@@ -148,22 +149,14 @@ pub(crate) fn option_value<'py>(py: Python<'py>, name: &str, text: &str) -> PyRe
     // Features: no observation budget interferes with checking one option on its own.
     let mut c = Config::features();
     c.set(name, text).map_err(config_error)?;
-    match name {
-        "obs_type" => c.obs_type.as_str().into_bound_py_any(py),
-        "obs_size" => c.obs_size.into_bound_py_any(py),
-        "frame_stack" => c.frame_stack.into_bound_py_any(py),
-        "hud" => c.hud.into_bound_py_any(py),
-        "hud_style" => c.hud_style.as_str().into_bound_py_any(py),
-        "lives" => c.lives.into_bound_py_any(py),
-        "bird_fuel_collision" => c.bird_fuel_collision.as_str().into_bound_py_any(py),
-        "alien_prob" => c.alien_prob.into_bound_py_any(py),
-        "frame_skip" => c.frame_skip.into_bound_py_any(py),
-        "sticky_prob" => c.sticky_prob.into_bound_py_any(py),
-        "bird_prob" => c.bird_prob.into_bound_py_any(py),
-        "fuel_prob" => c.fuel_prob.into_bound_py_any(py),
-        "max_fuel" => c.max_fuel.into_bound_py_any(py),
-        "max_episode_steps" => c.max_episode_steps.into_bound_py_any(py),
-        _ => Err(PyValueError::new_err(format!("option `{name}` has no Python value type here"))),
+    match c.value(name) {
+        Some(OptionValue::Choice(v)) => v.into_bound_py_any(py),
+        Some(OptionValue::Bool(v)) => v.into_bound_py_any(py),
+        Some(OptionValue::Size(v)) => v.into_bound_py_any(py),
+        Some(OptionValue::Integer(v)) => v.into_bound_py_any(py),
+        Some(OptionValue::IntegerOrNone(v)) => v.into_bound_py_any(py),
+        Some(OptionValue::Probability(v)) => v.into_bound_py_any(py),
+        None => Err(PyValueError::new_err(format!("option `{name}` has no Python value type here"))),
     }
 }
 

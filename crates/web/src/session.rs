@@ -4,17 +4,41 @@
 //! Nothing here touches JavaScript, so it is tested natively; `lib.rs` only maps it to `wasm-bindgen`.
 
 use chopperscape::policy::{self, Policy};
-use chopperscape::{Action, ChopperScape, Config, Env, ObsType, Observation, Status, Transition, World};
+use chopperscape::{Action, ChopperScape, Config, Env, OPTIONS, ObsType, Observation, Status, Transition, World};
 
 /// Height of the frame the page shows, in pixels.
 pub const FRAME_HEIGHT: usize = chopperscape::consts::HEIGHT as usize;
 /// Width of the frame the page shows, in pixels.
 pub const FRAME_WIDTH: usize = chopperscape::consts::WIDTH as usize;
 
-/// Options the page may set: the SPEC options that change play. Observation settings are the page's own
-/// business (it always shows the full frame), so they are refused.
-pub const PAGE_OPTIONS: &[&str] =
-    &["lives", "alien_prob", "bird_prob", "fuel_prob", "max_fuel", "bird_fuel_collision", "sticky_prob", "frame_skip"];
+/// Options the page may set: those the core's table marks `page` ([`chopperscape::OptionInfo::page`]), the SPEC
+/// options that change play, in table order. Observation settings are the page's own business (it always shows the
+/// full frame), so they are refused.
+pub const PAGE_OPTIONS: &[&str] = &page_options::<{ page_count() }>();
+
+/// How many options of the core's table the page sets.
+const fn page_count() -> usize {
+    let (mut n, mut i) = (0, 0);
+    while i < OPTIONS.len() {
+        n += OPTIONS[i].page as usize;
+        i += 1;
+    }
+    n
+}
+
+/// The names of the options of the core's table the page sets, in table order.
+const fn page_options<const N: usize>() -> [&'static str; N] {
+    let mut names = [""; N];
+    let (mut n, mut i) = (0, 0);
+    while i < OPTIONS.len() {
+        if OPTIONS[i].page {
+            names[n] = OPTIONS[i].name;
+            n += 1;
+        }
+        i += 1;
+    }
+    names
+}
 
 /// One game as the page plays it.
 pub struct Session {
@@ -207,6 +231,28 @@ mod tests {
         assert!(err.contains("alien_prob"), "{err}");
         let err = Session::new([("obs_type", "features")]).err().unwrap();
         assert!(err.contains("obs_type") && err.contains("lives"), "{err}");
+    }
+
+    /// Walks the core's table: the page takes each option marked `page` (its default and a value the option
+    /// allows) and refuses every other option by name, listing exactly the page's options.
+    #[test]
+    fn the_page_takes_exactly_the_page_options_of_the_table() {
+        for o in OPTIONS {
+            let result = Session::new([(o.name, o.default)]);
+            if o.page {
+                assert!(result.is_ok(), "{}: {:?}", o.name, result.err());
+                assert!(PAGE_OPTIONS.contains(&o.name));
+            } else {
+                let err = result.err().unwrap_or_else(|| panic!("the page took {}", o.name));
+                let listed = err.split("allowed options are ").nth(1).unwrap_or_default();
+                assert!(err.contains(&format!("`{}`", o.name)), "{err}");
+                assert_eq!(listed.split(", ").collect::<Vec<_>>(), PAGE_OPTIONS, "{err}");
+                assert!(!PAGE_OPTIONS.contains(&o.name));
+            }
+        }
+        let page: Vec<&str> = OPTIONS.iter().filter(|o| o.page).map(|o| o.name).collect();
+        assert_eq!(PAGE_OPTIONS, page);
+        assert!(PAGE_OPTIONS.iter().all(|name| chopperscape::option_info(name).is_some_and(|o| o.rule)));
     }
 
     #[test]

@@ -470,11 +470,10 @@ def from_action_logs(
     paths = [pathlib.Path(p) for p in logs]
     if not paths:
         raise ValueError("no action logs given: from_action_logs needs at least one")
-    bad = sorted(set(obs_options) - {"obs_type", "obs_size", "frame_stack", "hud", "hud_style"})
+    bad = sorted(set(obs_options) - set(_cli.OBSERVATION_OPTIONS))
     if bad:
         raise ValueError(
-            f"options {bad} change the rules, which come from the logs: allowed obs_type, obs_size, "
-            "frame_stack, hud, hud_style"
+            f"options {bad} change the rules, which come from the logs: allowed {', '.join(_cli.OBSERVATION_OPTIONS)}"
         )
     read = [read_action_log(p) for p in paths]
     rules, limit = read[0]["options"], read[0]["max_episode_steps"]

@@ -91,7 +91,7 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode> {
     if args.no_hud {
         option("hud", "false");
     }
-    if let Some(style) = &args.options.hud_style {
+    if let Some(style) = args.options.get("hud_style") {
         option("hud_style", style);
     }
     for (name, value) in args.options.given() {

@@ -7,6 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use crate::episode::replay_actions;
+use crate::options::DrawOptions;
 use crate::recording::{RecordOutputs, recorder};
 use crate::{actionlog, progress, usage_bail};
 
@@ -22,9 +23,9 @@ pub struct ReplayArgs {
     /// Print the replayed episode as one JSON line
     #[arg(long)]
     pub json: bool,
-    /// How the drawn frames show fuel and lives: auto (the text line at full size), text, or gauge [default: auto]
-    #[arg(long, value_name = "auto|text|gauge", value_parser = ["auto", "text", "gauge"])]
-    pub hud_style: Option<String>,
+    // How the frames are drawn (`--hud-style`): the flags of the core's table, as in every command.
+    #[command(flatten)]
+    pub draw: DrawOptions,
     #[command(flatten)]
     pub outputs: RecordOutputs,
 }
@@ -36,9 +37,7 @@ pub fn run(args: ReplayArgs) -> Result<ExitCode> {
     }
     args.outputs.check(Some(("the action log", &args.file)))?;
     let mut log = actionlog::read(&args.file)?;
-    if let Some(style) = &args.hud_style {
-        log.config.set("hud_style", style)?;
-    }
+    log.config = args.draw.apply(log.config)?;
     let bar = progress::bar(u64::from(log.steps) + 1, "replaying", args.json);
     let mut recorder = recorder(&args.outputs, log.steps + 1)?;
     let got = replay_actions(&log.config, log.seed, &log.actions, |env| {
