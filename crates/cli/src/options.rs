@@ -5,7 +5,8 @@
 //! error (exit code 2) and the core's message naming the option and its allowed range.
 
 use anyhow::{Context, Result};
-use chopperscape::{CliFlag, Config, OPTIONS, OptionInfo, option_info};
+use chopperscape::{CliFlag, Config, MODES, Mode, OPTIONS, OptionInfo, option_info};
+use clap::builder::PossibleValuesParser;
 use clap::{Arg, ArgAction, ArgMatches, Command};
 
 /// A clap value parser that accepts exactly what `Config::set(name, value)` accepts.
@@ -34,6 +35,23 @@ const HEADING: &str = "Game options (SPEC.md; the defaults are the v0 rules)";
 pub struct GameOptions {
     /// The flags given, as `(option, value)`, in table order.
     values: Vec<(&'static OptionInfo, String)>,
+    /// The difficulty mode `--mode` names ([`chopperscape::MODES`]): applied before the flags, which may not
+    /// contradict the rules it fixes.
+    mode: Option<&'static Mode>,
+}
+
+/// The `--mode` flag: a name of [`chopperscape::MODES`], as Python's `mode=` and the page's mode take it.
+fn mode_arg() -> Arg {
+    Arg::new("mode")
+        .long("mode")
+        .value_name("NAME")
+        .help(
+            "A difficulty mode of ChopperScape-Bench: it fixes every rules option but --max-episode-steps \
+             (docs/SPEC.md, \"Difficulty modes\"); a rules flag given beside it must agree with it",
+        )
+        .value_parser(PossibleValuesParser::new(MODES.iter().map(|m| m.name)))
+        .action(ArgAction::Set)
+        .required(false)
 }
 
 /// The options of the core's table that have a flag and that `keep` keeps, in table order.
@@ -80,18 +98,34 @@ impl GameOptions {
         self.values.iter().find(|(o, _)| o.name == name).map(|(_, v)| v.as_str())
     }
 
-    /// The rules flags that were given, as `(Config::set name, value)` (`--hud-style` is not one).
+    /// The rules options given, as `(Config::set name, value)` (`--hud-style` is not one): those `--mode` fixes
+    /// first, then the rules flags.
     pub fn given(&self) -> Vec<(&'static str, &str)> {
-        self.values.iter().filter(|(o, _)| o.rule).map(|(o, v)| (o.name, v.as_str())).collect()
+        let fixed = self.mode.into_iter().flat_map(|m| m.options.iter().copied());
+        fixed.chain(self.values.iter().filter(|(o, _)| o.rule).map(|(o, v)| (o.name, v.as_str()))).collect()
     }
 
-    /// `base` with these options applied, `--hud-style` included.
+    /// `base` with these options applied, `--hud-style` included: the mode's rules first, then the flags.
     ///
     /// # Errors
-    /// A value `Config::set` refuses (already checked while parsing, so only in theory).
+    /// A flag that contradicts `--mode` ([`crate::UsageError`], exit code 2); a value `Config::set` refuses
+    /// (already checked while parsing, so only in theory).
     pub fn apply(&self, mut base: Config) -> Result<Config> {
+        if let Some(mode) = self.mode {
+            mode.apply(&mut base).with_context(|| format!("mode {}", mode.name))?;
+        }
         for (o, value) in &self.values {
             base.set(o.name, value).with_context(|| format!("option {}", o.name))?;
+        }
+        if let Some(mode) = self.mode {
+            let wrong = mode.contradictions(&base);
+            if !wrong.is_empty() {
+                crate::usage_bail!(
+                    "options contradict --mode {}, whose rules options are fixed: {}; drop them, or give no --mode",
+                    mode.name,
+                    wrong.join(", ")
+                );
+            }
         }
         Ok(base)
     }
@@ -106,13 +140,17 @@ impl clap::FromArgMatches for GameOptions {
 
     fn update_from_arg_matches(&mut self, matches: &ArgMatches) -> Result<(), clap::Error> {
         read(&mut self.values, matches, every);
+        if let Some(name) = matches.get_one::<String>("mode") {
+            self.mode = chopperscape::mode(name);
+        }
         Ok(())
     }
 }
 
 impl clap::Args for GameOptions {
     fn augment_args(cmd: Command) -> Command {
-        flagged(every).fold(cmd.next_help_heading(HEADING), |cmd, (o, flag)| cmd.arg(arg(o, flag)))
+        let cmd = cmd.next_help_heading(HEADING).arg(mode_arg());
+        flagged(every).fold(cmd, |cmd, (o, flag)| cmd.arg(arg(o, flag)))
     }
 
     fn augment_args_for_update(cmd: Command) -> Command {
@@ -183,6 +221,37 @@ mod tests {
         assert!(!chopperscape_actionlog::rule_values(&c).contains_key("hud_style"));
     }
 
+    /// `--mode` plays each mode of the core's table as its options given one by one, takes only the table's
+    /// names, and refuses a rules flag that contradicts it (exit code 2) while one that agrees, the step limit
+    /// and the HUD's style stay free.
+    #[test]
+    fn a_mode_is_its_options_and_refuses_contradictions() {
+        for m in chopperscape::MODES {
+            let by_mode = parse(&["--mode", m.name]).unwrap().apply(Config::default()).unwrap();
+            assert_eq!(by_mode, m.config().unwrap(), "{}", m.name);
+            let mut one_by_one = Config::default();
+            for (name, value) in m.options {
+                one_by_one.set(name, value).unwrap();
+            }
+            assert_eq!(by_mode, one_by_one, "{}", m.name);
+            let free = parse(&["--mode", m.name, "--max-episode-steps", "50", "--hud-style", "gauge"]).unwrap();
+            assert_eq!(free.apply(Config::default()).unwrap().max_episode_steps, Some(50));
+        }
+        let err = parse(&["--mode", "nope"]).unwrap_err().to_string();
+        assert!(err.contains("v0") && err.contains("sticky-v0"), "{err}");
+        let full = chopperscape::mode("full-v0").unwrap();
+        let lives = full.value("lives").unwrap();
+        let agree = parse(&["--mode", "full-v0", "--lives", lives]).unwrap();
+        assert!(agree.apply(Config::default()).is_ok());
+        let clash = parse(&["--mode", "full-v0", "--lives", "7"]).unwrap();
+        let err = clash.apply(Config::default()).unwrap_err();
+        assert!(err.downcast_ref::<crate::UsageError>().is_some(), "{err}");
+        assert!(err.to_string().contains("contradict --mode full-v0") && err.to_string().contains("lives"), "{err}");
+        let v0 = parse(&["--mode", "v0", "--frame-skip", "4"]).unwrap();
+        assert!(v0.apply(Config::default()).is_err(), "v0 fixes frame_skip at 1");
+        assert!(parse(&["--mode", "sticky-v0"]).unwrap().given().contains(&("sticky_prob", "0.25")));
+    }
+
     /// Walks the core's table: every option with a flag is a flag of the commands that play, with the table's
     /// long name, value name and help, and its value reaches `Config::set` under the option's name; no other
     /// flag is there. Nothing here names an option.
@@ -190,7 +259,8 @@ mod tests {
     fn every_flag_is_the_tables() {
         use clap::Args as _;
         let cmd = GameOptions::augment_args(Command::new("t"));
-        let args: Vec<&Arg> = cmd.get_arguments().collect();
+        // `--mode` names a rules set of the modes table, not an option (a_mode_is_its_options_...).
+        let args: Vec<&Arg> = cmd.get_arguments().filter(|a| a.get_id() != "mode").collect();
         let table: Vec<(&OptionInfo, CliFlag)> = OPTIONS.iter().filter_map(|o| o.flag.map(|f| (o, f))).collect();
         assert_eq!(args.len(), table.len(), "one flag per option with a flag in the table");
         for (arg, (o, flag)) in args.iter().zip(&table) {
@@ -238,6 +308,7 @@ mod tests {
             ("lives", "L"),
             ("max-episode-steps", "N|none"),
             ("max-fuel", "N"),
+            ("mode", "NAME"),
             ("sticky", "P"),
         ];
         assert_eq!(flags, expected.map(|(a, b)| (a.to_string(), b.to_string())));

@@ -100,7 +100,7 @@ impl Mode {
     }
 
     /// The value this mode gives the rules option `name` as text, if it lists it.
-    fn value(&self, name: &str) -> Option<&'static str> {
+    pub fn value(&self, name: &str) -> Option<&'static str> {
         self.options.iter().find(|(n, _)| *n == name).map(|&(_, v)| v)
     }
 

@@ -73,6 +73,7 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode> {
     if !args.from_logs.is_empty() && !args.options.given().is_empty() {
         usage_bail!("--from-logs replays the logs under their own rules: game options cannot be given with it");
     }
+    args.options.apply(chopperscape::Config::default())?; // a flag that contradicts --mode is refused here
     check_python(&python)?;
     let mut cmd = Command::new(&python);
     cmd.args(["-m", "chopperscape.integrations.datasets", "--out", &args.out]);

@@ -8,8 +8,8 @@ use clap::Args;
 
 use super::{PolicyArg, policy_and_config, policy_parser, table_header, table_row};
 use crate::episode::play_policy;
-use crate::recording::{RecordOutputs, render};
 use crate::options::GameOptions;
+use crate::recording::{RecordOutputs, render};
 use crate::{actionlog, output, progress, usage_bail};
 
 /// Record one episode of a built-in or a trained policy.
