@@ -13,7 +13,7 @@ if [ "$(wasm-bindgen --version 2>/dev/null || true)" != "wasm-bindgen $WASM_BIND
   # A build tool, not something shipped: its output is the same at any optimisation, so it is built at opt-level 1
   # with parallel codegen and no LTO, which compiles in about half the time of cargo install's release profile.
   CARGO_PROFILE_RELEASE_OPT_LEVEL=1 CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 CARGO_PROFILE_RELEASE_LTO=false \
-    quiet cargo install --locked wasm-bindgen-cli --version "$WASM_BINDGEN_VERSION"
+    quiet cargo install wasm-bindgen-cli --version "$WASM_BINDGEN_VERSION"
 fi
 
 # `build-web.sh --install-only`: the tools above and nothing else (scripts/test-all.sh installs them early).
