@@ -1,6 +1,6 @@
 // The ChopperScape page: runs the Rust game (compiled to WebAssembly) at 30 steps per second and draws each
 // frame straight from WebAssembly memory into the canvas.
-import init, { Game } from "./pkg/chopperscape_web.js";
+import init, { Game, mode_names, mode_value } from "./pkg/chopperscape_web.js";
 
 const STEP_MS = 1000 / 30; // SPEC: render_fps = 30
 const MAX_STEPS_PER_FRAME = 5; // after a stall (hidden tab), catch up a little, never in a burst
@@ -23,6 +23,18 @@ const canvas = $("screen");
 const ctx = canvas.getContext("2d", { alpha: false });
 
 const wasm = await init();
+// The rules the form sets beside the mode; a mode fixes them (the core's modes table, as `--mode` does).
+const RULE_INPUTS = ["lives", "alien_prob"];
+for (const name of mode_names()) $("mode").add(new Option(name, name));
+
+// A mode fills the rules inputs with its values and locks them; "custom" unlocks them.
+function applyMode() {
+  const mode = $("mode").value;
+  for (const name of RULE_INPUTS) {
+    if (mode) $(name).value = mode_value(mode, name);
+    $(name).disabled = Boolean(mode);
+  }
+}
 
 let game = null;
 let seed = 0n; // of the game on screen
@@ -71,8 +83,8 @@ function newGame() {
   let nextSeed;
   try {
     nextSeed = readSeed();
-    const names = ["lives", "alien_prob"];
-    const values = [$("lives").value, $("alien_prob").value];
+    const names = ["mode", ...RULE_INPUTS];
+    const values = names.map((name) => $(name).value);
     next = agent ? Game.with_policy(agentBytes, names, values) : new Game(names, values);
   } catch (e) {
     showError(e.message);
@@ -230,6 +242,7 @@ $("controls").addEventListener("submit", (event) => {
   event.preventDefault();
   if (newGame() === null) canvas.focus();
 });
+$("mode").addEventListener("change", applyMode);
 $("pause").addEventListener("click", () => setPaused(!paused));
 $("heuristic").addEventListener("click", () => setHeuristic(!heuristic));
 $("agent").addEventListener("click", () => setAgent(!agent));
@@ -261,8 +274,12 @@ window.chopperscape = {
   // Fills the form and starts a game; returns the error message, or null.
   newGame(seedValue, options = {}) {
     $("seed").value = String(seedValue);
-    $("lives").value = String(options.lives ?? 1);
-    $("alien_prob").value = String(options.alien_prob ?? 0);
+    $("mode").value = options.mode ?? "";
+    applyMode();
+    if (!options.mode) {
+      $("lives").value = String(options.lives ?? 1);
+      $("alien_prob").value = String(options.alien_prob ?? 0);
+    }
     return newGame();
   },
   setPaused,

@@ -117,6 +117,32 @@ test("the browser frame equals the native frame for a fixed seed and actions", a
   });
 });
 
+test("a mode fixes the rules as --mode does: the menu lists the core's modes, locks the rules, plays the same game", async () => {
+  // docs/SPEC.md, "Difficulty modes": full-v0 is these options given one by one.
+  const fullV0 = { frame_skip: 4, sticky_prob: 0.25, lives: 3, alien_prob: 0.005, bird_fuel_collision: "destroy" };
+  const actions = Array.from({ length: 90 }, (_, i) => [3, 3, 0, 4, 2, 1][i % 6]);
+  await withPage(async (page, errors) => {
+    const listed = await page.evaluate(() => [...document.querySelectorAll("#mode option")].map((o) => o.value));
+    assert.deepEqual(listed, ["", "v0", "sticky-v0", "full-v0"]);
+    const s = await page.evaluate((acts) => {
+      window.chopperscape.setPaused(true);
+      const err = window.chopperscape.newGame(5, { mode: "full-v0" });
+      if (err) throw new Error(err);
+      return window.chopperscape.stepN(acts);
+    }, actions);
+    assert.ok(s.steps > 0);
+    assert.equal(await page.inputValue("#lives"), "3");
+    assert.equal(await page.inputValue("#alien_prob"), "0.005");
+    assert.equal(await page.isDisabled("#lives"), true);
+    const expected = nativeFrame(5, actions, fullV0);
+    assert.equal(firstDifference(await frame(page, "frameBytes"), expected), null, "the mode's game is its options'");
+    // "custom" hands the rules back to the form.
+    await page.selectOption("#mode", "");
+    assert.equal(await page.isDisabled("#lives"), false);
+    assert.deepEqual(errors, []);
+  });
+});
+
 test("an option out of range is refused with its name and changes nothing", async () => {
   await withPage(async (page) => {
     await page.evaluate(() => window.chopperscape.setPaused(true));

@@ -37,6 +37,21 @@ pub struct StepResult {
     pub cause: Option<String>,
 }
 
+/// The names of the difficulty modes (`chopperscape::MODES`, easiest first): what the page's mode menu lists, with
+/// the meaning `--mode` and Python's `mode=` give them.
+#[wasm_bindgen]
+pub fn mode_names() -> Vec<String> {
+    chopperscape::MODES.iter().map(|m| m.name.to_string()).collect()
+}
+
+/// The value mode `mode` fixes for rules option `option` as text (`"3"` for `lives` in `full-v0`), or the
+/// option's default where the mode keeps it; `undefined` for an unknown mode or option.
+#[wasm_bindgen]
+pub fn mode_value(mode: &str, option: &str) -> Option<String> {
+    let config = chopperscape::mode(mode)?.config().ok()?;
+    config.get(option)
+}
+
 /// One game of ChopperScape-v0 with the page's options, its frame, and the heuristic policy.
 #[wasm_bindgen]
 pub struct Game {

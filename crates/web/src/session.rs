@@ -89,11 +89,37 @@ impl Session {
         options: impl IntoIterator<Item = (&'a str, &'a str)>,
         agent: Option<chopperscape_policy::Policy>,
     ) -> Result<Session, String> {
+        // `mode` (a name of chopperscape::MODES, as `--mode` and Python's `mode=` take it) is applied first,
+        // wherever it stands; the other options go on top and may not contradict it.
+        let options: Vec<(&str, &str)> = options.into_iter().collect();
+        let mut mode = None;
+        for &(name, value) in &options {
+            if name == "mode" && !value.is_empty() {
+                let m = chopperscape::mode(value).ok_or_else(|| {
+                    format!("invalid value {value:?} for `mode`: allowed {}", chopperscape::mode_names())
+                })?;
+                m.apply(&mut config).map_err(|e| e.to_string())?;
+                mode = Some(m);
+            }
+        }
         for (name, value) in options {
+            if name == "mode" {
+                continue;
+            }
             if !PAGE_OPTIONS.contains(&name) {
-                return Err(format!("unknown option `{name}`: allowed options are {}", PAGE_OPTIONS.join(", ")));
+                return Err(format!("unknown option `{name}`: allowed options are mode, {}", PAGE_OPTIONS.join(", ")));
             }
             config.set(name, value).map_err(|e| e.to_string())?;
+        }
+        if let Some(m) = mode {
+            let wrong = m.contradictions(&config);
+            if !wrong.is_empty() {
+                return Err(format!(
+                    "options contradict mode {}, whose rules options are fixed: {}",
+                    m.name,
+                    wrong.join(", ")
+                ));
+            }
         }
         if let Some(agent) = &agent {
             agent.check(&config).map_err(|e| e.to_string())?;
@@ -244,7 +270,7 @@ mod tests {
                 assert!(PAGE_OPTIONS.contains(&o.name));
             } else {
                 let err = result.err().unwrap_or_else(|| panic!("the page took {}", o.name));
-                let listed = err.split("allowed options are ").nth(1).unwrap_or_default();
+                let listed = err.split("allowed options are mode, ").nth(1).unwrap_or_default();
                 assert!(err.contains(&format!("`{}`", o.name)), "{err}");
                 assert_eq!(listed.split(", ").collect::<Vec<_>>(), PAGE_OPTIONS, "{err}");
                 assert!(!PAGE_OPTIONS.contains(&o.name));
@@ -253,6 +279,31 @@ mod tests {
         let page: Vec<&str> = OPTIONS.iter().filter(|o| o.page).map(|o| o.name).collect();
         assert_eq!(PAGE_OPTIONS, page);
         assert!(PAGE_OPTIONS.iter().all(|name| chopperscape::option_info(name).is_some_and(|o| o.rule)));
+    }
+
+    /// The page's `mode` is the core's: each mode plays the game of its options given one by one (the same rewards,
+    /// ends and frames); an unknown name, or a page option that contradicts the mode, is refused naming it.
+    #[test]
+    fn a_mode_is_its_options_and_refuses_contradictions() {
+        for m in chopperscape::MODES {
+            let mut by_mode = session(&[("mode", m.name)]);
+            let mut by_hand = session(m.options);
+            assert_eq!(by_mode.env.config(), &Config { obs_type: ObsType::Features, ..m.config().unwrap() });
+            by_mode.reset(4);
+            by_hand.reset(4);
+            for i in 0..200_i64 {
+                if by_mode.is_over() {
+                    break;
+                }
+                assert_eq!(by_mode.step(i % 5).unwrap(), by_hand.step(i % 5).unwrap(), "{} step {i}", m.name);
+                assert_eq!(by_mode.rgb(), by_hand.rgb(), "{} step {i}", m.name);
+            }
+        }
+        let err = Session::new([("mode", "hard-v9")]).err().unwrap();
+        assert!(err.contains("hard-v9") && err.contains("sticky-v0"), "{err}");
+        let err = Session::new([("lives", "7"), ("mode", "full-v0")]).err().unwrap();
+        assert!(err.contains("contradict mode full-v0") && err.contains("lives"), "{err}");
+        assert!(Session::new([("mode", "v0"), ("lives", "1")]).is_ok());
     }
 
     #[test]
