@@ -65,6 +65,10 @@ PRESETS: dict[str, dict[str, Any]] = {
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
 PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
+#: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
+#: model's claimed network must also fit the weights it holds before it is built (`model.agent_from_checkpoint`).
+MAX_MODEL_BYTES = 1 << 30
+
 #: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core.
 DEFAULT_STEPS = 15_000_000
 

@@ -30,17 +30,20 @@ Pixel recipes learn here with a features teacher: ``--preset pixels --teacher mo
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
 import time
 from collections import deque
+from collections.abc import Iterator
 from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from .. import _core, _signals
+from .. import _atomic, _core, _signals
 from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
@@ -50,6 +53,7 @@ from .recipe import (
     PRESETS,
     RECIPE_FLAGS,
     RESERVED_OPTIONS,
+    RUN_FILES,
     Recipe,
     check_minutes,
     check_recipe,
@@ -87,7 +91,7 @@ def load_teacher(recipe: Recipe) -> Model:
     """The features model `recipe.teacher` names, checked to guide this recipe: a features MLP trained on the same
     rules (frame skip included). `ValueError` in one line otherwise; the file is read as data
     (`torch.load(weights_only=True)`), never run."""
-    if not Path(recipe.teacher).is_file():
+    if not os.path.lexists(recipe.teacher):
         raise ValueError(f"teacher {recipe.teacher!r}: no such file (give a features model.pt from this trainer)")
     teacher = load(Path(recipe.teacher), f"teacher {recipe.teacher!r}")
     if teacher.recipe["obs_type"] != "features" or len(teacher.obs_shape) != 1:
@@ -102,6 +106,70 @@ def load_teacher(recipe: Recipe) -> Model:
             f"({mine or 'the defaults'}): train the teacher with the same rules options, frame_skip included"
         )
     return teacher
+
+
+class RunWriteError(OSError):
+    """A file of the run could not be written (a read-only folder, a full disk): the message names it."""
+
+
+@contextlib.contextmanager
+def _writing(path: Path, after: str = "") -> Iterator[None]:
+    """`OSError` in the block as a `RunWriteError` naming `path` (and what is kept, `after`)."""
+    try:
+        yield
+    except RunWriteError:
+        raise
+    except OSError as e:
+        raise RunWriteError(f"cannot write {path}: {e.strerror or e}{after}") from None
+
+
+def _next_aside(out: Path) -> Path:
+    """The first free `OUT/replaced-N` (N = 1, 2, …): where `--force` keeps the run it replaces."""
+    n = 1
+    while os.path.lexists(out / f"replaced-{n}"):
+        n += 1
+    return out / f"replaced-{n}"
+
+
+def start_run(out: Path, recipe: Recipe) -> tuple[progress.Writer, Path | None]:
+    """Makes the run folder `out` ready for a new run and writes its `recipe.json` and the progress header:
+    a run already there (`--force`) is first moved whole into `OUT/replaced-N`, so that `out` never holds files of
+    two runs. Returns the progress writer and where the old run went (None if there was none). On a write
+    error (`RunWriteError`, `ValueError` for an `out` that cannot be a folder), nothing new is left behind and an
+    old run is moved back."""
+    made = not os.path.lexists(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"--out {out}: cannot make the folder: {e.strerror or e}") from None
+    old = [name for name in RUN_FILES if os.path.lexists(out / name)]
+    aside = _next_aside(out) if old else None
+    moved: list[str] = []
+    try:
+        if aside is not None:
+            with _writing(aside):
+                aside.mkdir()
+                for name in old:
+                    os.replace(out / name, aside / name)
+                    moved.append(name)
+        with _writing(out / "recipe.json"):
+            _atomic.write_text(out / "recipe.json", json.dumps(asdict(recipe), indent=2) + "\n")
+        with _writing(out / "progress.csv"):
+            return progress.Writer(out / "progress.csv"), aside
+    except BaseException:
+        for name in ("progress.csv", "recipe.json"):
+            with contextlib.suppress(OSError):
+                if name not in old or name in moved:
+                    os.unlink(out / name)
+        for name in moved:
+            with contextlib.suppress(OSError):
+                os.replace(aside / name, out / name)  # type: ignore[operator]
+        with contextlib.suppress(OSError):
+            if aside is not None:
+                aside.rmdir()
+            if made:
+                out.rmdir()
+        raise
 
 
 def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False) -> Path:
@@ -141,6 +209,13 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             twin_options.update({k: v for k, v in seen if k not in RULE_OPTIONS and k != "obs_type"})
         twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
         feat_dim = int((twin.single_observation_space.shape or (0,))[0])
+        if teacher is not None and tuple(teacher.obs_shape) != (feat_dim,):
+            envs.close()
+            twin.close()
+            raise ValueError(
+                f"teacher {recipe.teacher!r} takes observations of shape {teacher.obs_shape}, but its env options "
+                f"give ({feat_dim},): it is not a model this trainer wrote"
+            )
     if recipe.aux_coef > 0 and cnn is not None:
         feat_norm = ObsNormalizer((feat_dim,), True)
         with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
@@ -194,10 +269,10 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     start = time.monotonic()
     model_path = out / "model.pt"
     csv_path = out / "progress.csv"
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "recipe.json", "w") as f:
-        json.dump(asdict(recipe), f, indent=2)
-    writer = progress.Writer(csv_path)
+    writer, aside = start_run(out, recipe)
+    if aside is not None:
+        print(f"note: --force: the run that was in {out} is kept in {aside}", file=sys.stderr)
+    kept = "; the model saved last is kept"
     update = 0
     stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
     try:
@@ -351,16 +426,20 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 row["aux_loss"] = f"{m[6]:.5f}"
             if teacher is not None:
                 row["teacher_kl"] = f"{m[7]:.5f}"
-            writer.row(row)
+            with _writing(csv_path, kept):
+                writer.row(row)
             if update % 50 == 0:
-                save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+                with _writing(model_path, kept):
+                    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     finally:
-        writer.close()
+        with contextlib.suppress(OSError):
+            writer.close()
         envs.close()
         if twin is not None:
             twin.close()
         stop.restore()
-    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+    with _writing(model_path, kept):
+        save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
     return model_path
 
@@ -453,8 +532,11 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:  # an env option the env refuses
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except FloatingPointError as e:
+    except (FloatingPointError, RuntimeError) as e:  # a loss that is not finite, a twin env out of step
         print(f"error: training stopped: {e}; the model saved last is kept", file=sys.stderr)
+        return 1
+    except RunWriteError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 1
     except _signals.Interrupted as e:
         print(e, file=sys.stderr)
