@@ -376,3 +376,61 @@ def test_a_device_or_a_folder_as_a_model_says_what_it_is(what, named, tmp_path, 
     assert ex.main([str(path), "--out", str(tmp_path / "m.onnx")]) == 2
     line = one_line(capsys.readouterr().err)
     assert named in line and str(path) in line, line
+
+
+# --- Every flag of the four commands: huge, negative, NaN, missing files, folders in place of files ----------
+
+
+@pytest.mark.parametrize(
+    "args,named",
+    [
+        (["--hidden", "65536"], "hidden"),  # 2 x 16 GiB of weights: minutes before any error
+        (["--update-epochs", "100000000"], "update_epochs"),  # an update that never ends, signals deferred
+        (["--steps", str(10**13)], "total_steps"),
+        (["--num-steps", "100000000"], "num_steps"),  # 155 GiB of rollout buffers
+        (["--option", "obs_size=4096x4096", "--obs-type", "rgb_float", "--network", "nature"], "parameters"),
+        (["--preset", "pixels", "--teacher", "/dev/zero"], "is a device"),
+        (["--preset", "pixels", "--teacher", "."], "is a folder"),
+        (["--preset", "pixels", "--teacher", "recipe.json"], "not a zip archive"),
+    ],
+)
+def test_train_flags_out_of_bounds_are_one_line_exit_2_before_anything_is_written(
+    args, named, tmp_path, monkeypatch, capsys
+):
+    monkeypatch.chdir(tmp_path)
+    pathlib.Path("recipe.json").write_text("{}")
+    out = tmp_path / "run"
+    start = time.monotonic()
+    try:
+        code = train.main(["--out", str(out), *SMALL, *args])
+    except SystemExit as e:
+        code = e.code
+    assert code == 2 and time.monotonic() - start < 30
+    assert named in one_line(capsys.readouterr().err)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "args,named",
+    [
+        (["--seeds", "0", "--out", "OUT", "--jobs", "0"], "--jobs"),
+        (["--seeds", "0", "--out", "OUT", "--eval-episodes", str(10**14)], "--eval-episodes"),
+        (["--seeds", "0", "--out", "OUT", "--eval-seed", str(2**63)], "--eval-seed"),
+        (["--seeds", "0", "--out", "OUT", "--steps", str(10**20)], "--steps"),
+        (["--seeds", str(2**64), "--out", "OUT"], "--seeds"),
+        (["--seeds", "0", "--out", "FILE"], "not a folder"),
+    ],
+)
+def test_seeds_flags_out_of_bounds_are_refused_before_any_training(args, named, tmp_path, capsys):
+    (tmp_path / "FILE").write_text("mine")
+    args = [str(tmp_path / x) if x in ("OUT", "FILE") else x for x in args]
+    with pytest.raises(SystemExit) as e:
+        seeds.main(args)
+    assert e.value.code == 2 and named in one_line(capsys.readouterr().err)
+    assert sorted(os.listdir(tmp_path)) == ["FILE"]
+
+
+def test_evaluate_refuses_more_episodes_than_it_can_play(capsys):
+    with pytest.raises(SystemExit) as e:
+        ev.main(["noop", "--episodes", str(10**23)])
+    assert e.value.code == 2 and "--episodes" in one_line(capsys.readouterr().err)

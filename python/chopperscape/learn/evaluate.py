@@ -54,6 +54,8 @@ from .recipe import MAX_MODEL_BYTES
 
 #: Most environments stepped together while evaluating (bounded memory, whatever `--episodes`).
 CHUNK = 128
+#: The most episodes one evaluation plays (`--episodes`): hours of CPU, constant memory.
+MAX_EPISODES = 1_000_000
 
 
 def iter_episodes(
@@ -339,8 +341,8 @@ def main(argv: list[str] | None = None) -> int:
         "loaded, so only for files whose author you trust",
     )
     a = p.parse_args(argv)
-    if a.episodes < 1:
-        p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
+    if not 1 <= a.episodes <= MAX_EPISODES:
+        p.error(f"--episodes {a.episodes}: allowed an integer in 1..={MAX_EPISODES}")
     if not 0 <= a.seed < 2**63:
         p.error(f"--seed {a.seed}: allowed 0 <= seed < 2**63")
     if not 1 <= a.video_episodes <= a.episodes:

@@ -12,6 +12,7 @@ import math
 import pickle
 import re
 import warnings
+import zipfile
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar, cast
@@ -378,6 +379,10 @@ def read_checkpoint(path: Path, what: str) -> Any:
     crafted file cannot run code); `ValueError` in one line naming the file and the reason when it is not a regular
     file of at most `MAX_MODEL_BYTES`, is damaged, or holds more."""
     regular_file(path, what, MAX_MODEL_BYTES)
+    if not zipfile.is_zipfile(path):
+        raise ValueError(
+            f"{what} is not a chopperscape.learn.train model: it is not a zip archive, the form torch.save writes"
+        )
     try:
         with warnings.catch_warnings():  # torch's notes on pickle protocols: the refusal below says what matters
             warnings.simplefilter("ignore")
@@ -388,7 +393,10 @@ def read_checkpoint(path: Path, what: str) -> Any:
             f"({_reason(err)}), and is refused because unpickling it could run code"
         ) from None
     except Exception as err:
-        raise ValueError(f"{what} is not a chopperscape.learn.train model: it is damaged ({_reason(err)})") from None
+        reason = _reason(err)
+        if len(reason) < 20:  # `KeyError: '105'` says nothing without its type
+            reason = f"{type(err).__name__}: {reason}"
+        raise ValueError(f"{what} is not a chopperscape.learn.train model: it is damaged ({reason})") from None
 
 
 class Model(NamedTuple):

@@ -76,8 +76,8 @@ def parse_seeds(text: str) -> list[int]:
             b = int(hi) if dash else a
         except ValueError:
             raise ValueError(f"--seeds {text!r}: {item!r} is not a seed or a range (e.g. 0-9 or 0,3,5)") from None
-        if a < 0 or b < a or b - a >= 1000:
-            raise ValueError(f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST with at most 1000 seeds")
+        if a < 0 or b < a or b - a >= 1000 or b >= 2**64:
+            raise ValueError(f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST < 2**64 with at most 1000 seeds")
         seeds.update(dict.fromkeys(range(a, b + 1)))
     if len(seeds) > 1000:
         raise ValueError(f"--seeds {text!r}: at most 1000 seeds")
@@ -383,7 +383,8 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any], title: str =
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .recipe import DEFAULT_STEPS
+    from .evaluate import MAX_EPISODES
+    from .recipe import DEFAULT_STEPS, MAX_TOTAL_STEPS
 
     p = argparse.ArgumentParser(
         prog="python -m chopperscape.learn.seeds",
@@ -405,8 +406,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
     a, forward = p.parse_known_args(argv)
-    if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
-        p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
+    if not 1 <= a.steps <= MAX_TOTAL_STEPS:
+        p.error(f"--steps {a.steps}: allowed an integer in 1..={MAX_TOTAL_STEPS}")
+    if not 1 <= a.eval_episodes <= MAX_EPISODES:
+        p.error(f"--eval-episodes {a.eval_episodes}: allowed an integer in 1..={MAX_EPISODES}")
+    if not 0 <= a.eval_seed < 2**63:
+        p.error(f"--eval-seed {a.eval_seed}: allowed 0 <= seed < 2**63")
+    if a.jobs is not None and not 1 <= a.jobs <= 1024:
+        p.error(f"--jobs {a.jobs}: allowed an integer in 1..=1024")
     if a.summarise is not None:
         if a.seeds or a.out or forward:
             p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
@@ -422,12 +429,15 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         p.error(str(err))
     jobs = a.jobs or max(1, min(len(seeds), os.cpu_count() or 1))
-    if jobs < 1:
-        p.error(f"--jobs {a.jobs}: allowed an integer >= 1")
+    if os.path.lexists(a.out) and not a.out.is_dir():
+        p.error(f"--out {a.out} is not a folder")
     forward = forward + [x for o in a.option for x in ("--option", o)]
     # What makes two runs of a seed the same run: a stored evaluation counts only if all of it matches.
     key = {"steps": a.steps, "train_args": forward, "episodes": a.eval_episodes, "seed": a.eval_seed}
-    a.out.mkdir(parents=True, exist_ok=True)
+    try:
+        a.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        p.error(f"--out {a.out}: cannot make the folder: {e.strerror or e}")
     try:
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             futures = {s: pool.submit(_seed_run, s, a, forward, key) for s in seeds}
@@ -495,7 +505,7 @@ def summarise_folder(a: argparse.Namespace) -> int:
         for s in results:
             curve = folder / f"seed-{s}.csv"
             if not os.path.lexists(curve):
-                raise ValueError(f"no training curve for seed {s}: {curve} is missing")
+                raise ValueError(f"no training curve for every seed: {curve} missing")
             _curve(curve)
             curves[s] = curve
         a.out, a.option = folder, []

@@ -50,6 +50,8 @@ from . import progress
 from .model import CnnAgent, Model, ObsNormalizer, RunningMeanStd, build_agent, load, save
 from .recipe import (
     DEFAULT_STEPS,
+    MAX_PARAMETERS,
+    MAX_ROLLOUT_BYTES,
     PRESETS,
     RECIPE_FLAGS,
     RESERVED_OPTIONS,
@@ -190,6 +192,14 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
+    with torch.device("meta"):  # the network's size, before any memory is taken
+        size = sum(p.numel() for p in build_agent(network, obs_shape, 5, recipe.hidden).parameters())
+    if size > MAX_PARAMETERS:
+        envs.close()
+        raise ValueError(
+            f"the {network} network on observations of shape {obs_shape} would have {size:,} parameters, more than "
+            f"{MAX_PARAMETERS:,}: smaller observations (obs_size), fewer stacked frames or a smaller network"
+        )
     agent = build_agent(network, obs_shape, 5, recipe.hidden, recipe.invert_frames).to(device)
     # --- Guidance from the game's features (pixel recipes: `aux_coef > 0`, `teacher`) ---------------------------
     # A twin env with `features` observations, reset with the same seeds and stepped with the same actions, is in
@@ -237,6 +247,17 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
 
     # --- Rollout storage -------------------------------------------------------------------------------------
     n, t_len = recipe.num_envs, recipe.num_steps
+    # Each stored step: its observation (twice: the buffer and the update's batch), the twin's features, the
+    # teacher's log-probabilities and seven numbers.
+    per_step = 2 * math.prod(obs_shape) * (1 if pixels else 4) + 4 * (2 * feat_dim + 5 + 7)
+    if n * t_len * per_step > MAX_ROLLOUT_BYTES:
+        envs.close()
+        if twin is not None:
+            twin.close()
+        raise ValueError(
+            f"invalid values {n} and {t_len} for options `num_envs` and `num_steps`: an update's rollout would take "
+            f"{n * t_len * per_step / 2**30:.1f} GiB, more than {MAX_ROLLOUT_BYTES >> 30} GiB: fewer envs or steps"
+        )
     buf_obs = torch.zeros((t_len, n, *obs_shape), dtype=torch.uint8 if pixels else torch.float32, device=device)
     buf_act = torch.zeros((t_len, n), dtype=torch.long, device=device)
     buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
