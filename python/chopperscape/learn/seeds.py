@@ -21,7 +21,10 @@ Other trainers' runs (SB3, RLlib) are summarised the same way from their files: 
 ``DIR/seed-K.eval.json`` (``python -m chopperscape.learn.evaluate`` output, or ``rllib_ppo.py --eval-out``) and
 ``DIR/seed-K.csv`` (a progress CSV with ``env_steps`` and ``mean_return``) for every ``K`` there, evaluates the
 baselines on the same held-out seeds (kept in ``DIR/baseline-NAME.json``) and writes the same three files into
-``DIR``; ``--title`` names the trainer in the plot:
+``DIR``; ``--title`` names the trainer in the plot. Every file is checked before anything is played or written
+(:func:`read_eval`, :func:`_curve`): one that is not a regular UTF-8 file, lacks a field, holds a value of the wrong
+kind, NaN, Infinity or a number out of range, or a curve whose steps do not increase, is refused by name (exit 2)
+and nothing is written; ``summary.json`` is always valid JSON:
 
     python -m chopperscape.learn.seeds --summarise docs/curves/rllib-3seeds --steps 5000000 --title "RLlib PPO"
 

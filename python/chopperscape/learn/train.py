@@ -18,7 +18,11 @@ Training seeds are ``seed, seed + 1, …`` (one per env); evaluate on other seed
 
 Runs are reproducible: every schedule (the learning rate) follows env steps over the step budget ``--steps``, never
 the wall clock, so the same seed and budget give the same curve on any host; ``--minutes`` only stops a run early.
-A folder that already holds a run is refused unless ``--force`` (which starts the run over in it). Every setting is
+A folder that already holds a run is refused unless ``--force``, which first moves that run whole into
+``OUT/replaced-N`` (the first free N; stderr says where) and only then starts the new run there: a run folder never
+mixes files of two runs, even if the new run is killed before its first save, and the old run is never lost.
+``recipe.json`` and ``model.pt`` are written whole or not at all (:mod:`chopperscape._atomic`); a file that cannot be
+written (a read-only folder, a full disk) ends the run with one line naming it (exit 1). Every setting is
 checked before anything is written; a loss that is not finite stops the run before the optimiser step, so the saved
 model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
 reached so far atomically, and exits with 130, 143, 129.
