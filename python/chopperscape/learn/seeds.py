@@ -487,7 +487,7 @@ def summarise_folder(a: argparse.Namespace) -> int:
     increase) is refused with its name, exit 2, and nothing is written."""
     folder: Path = a.summarise
     if not folder.is_dir():
-        print(f"error: --summarise {folder}: not a folder", file=sys.stderr)
+        print(f"error: {folder} has no seed-K.eval.json to summarise (it is not a folder)", file=sys.stderr)
         return 2
     results: dict[int, dict[str, Any]] = {}
     curves: dict[int, Path] = {}

@@ -196,8 +196,10 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
-    with torch.device("meta"):  # the network's size, before any memory is taken
-        size = sum(p.numel() for p in build_agent(network, obs_shape, 5, recipe.hidden).parameters())
+    size = 0
+    if network != "mlp":  # a CNN's size grows with the frames: measured on the meta device, taking no memory
+        with torch.device("meta"):
+            size = sum(p.numel() for p in build_agent(network, obs_shape, 5, recipe.hidden).parameters())
     if size > MAX_PARAMETERS:
         envs.close()
         raise ValueError(
