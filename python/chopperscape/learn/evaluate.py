@@ -15,13 +15,16 @@ and plain data), and the pickled parts of an SB3 ``.zip`` are replaced by what t
 only for files whose author you trust.
 
 Episode ``k`` is played on seed ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or
-to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``), with the greedy action
+to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``; a recipe model trained with
+``--option max_episode_steps=N`` plays to its own ``N`` unless ``--option`` gives another), with the greedy action
 (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
 
     {"model": ..., "episodes": 100, "seed": 1000000, "mean_return": ..., "std_return": ..., "min_return": ...,
      "max_return": ..., "mean_steps": ..., "causes": {"bird": 0.62, "fuel": 0.08, "truncated": 0.30}, ...}
 
-where ``causes`` gives the share of episodes that ended each way (``--per-episode`` adds each episode's seed,
+Memory does not grow with ``--episodes`` (at most 1,000,000): episodes are played ``CHUNK`` at a time and summarised
+as they end, and the ``--per-episode`` rows wait in a temporary file until the line is written. ``causes`` gives
+the share of episodes that ended each way (``--per-episode`` adds each episode's seed,
 return, steps and cause: the episodes ``chopperscape demo --policy MODEL.onnx --json`` plays for the same
 ``--seed``, from the export of the same model).
 

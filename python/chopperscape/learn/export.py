@@ -23,10 +23,13 @@ The file's ``metadata_props`` say what the policy takes (the Rust loader refuses
     pixels_version    the pixel layout it learned (chopperscape.PIXELS_VERSION)
     source_sha256     the SHA-256 of MODEL
 
-After writing, the export is checked: its logits must equal torch's within 1e-5 on 1,000 observations recorded by
-playing the env with the policy (with ``onnxruntime`` when it is installed; otherwise the check is skipped and
-says so: ``pip install onnxruntime``). Exit status 0, or 2 with one line on standard error (a missing file, a
-file that is not a recipe model, an existing ``--out`` without ``--force``), 1 if the check fails.
+The export is built and checked in memory before anything is written: its logits must equal torch's within 1e-5 on
+1,000 observations recorded by playing the env with the policy (with ``onnxruntime`` when it is installed;
+otherwise the check is skipped and says so: ``pip install onnxruntime``); then ``--out`` is written whole or not at
+all (:mod:`chopperscape._atomic`). Exit status 0, or 2 with one line on standard error naming the input (a missing
+file, a folder or a device, a file that is not a recipe model, an ``--out`` under a file or that is a folder, an
+existing ``--out`` without ``--force``), 1 if the check fails or ``--out`` cannot be written (a read-only folder, a
+full disk: nothing is left behind).
 """
 
 from __future__ import annotations
