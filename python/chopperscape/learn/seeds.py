@@ -80,7 +80,9 @@ def parse_seeds(text: str) -> list[int]:
         except ValueError:
             raise ValueError(f"--seeds {text!r}: {item!r} is not a seed or a range (e.g. 0-9 or 0,3,5)") from None
         if a < 0 or b < a or b - a >= 1000 or b >= 2**64:
-            raise ValueError(f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST < 2**64 with at most 1000 seeds")
+            raise ValueError(
+                f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST with at most 1000 seeds, each < 2**64"
+            )
         seeds.update(dict.fromkeys(range(a, b + 1)))
     if len(seeds) > 1000:
         raise ValueError(f"--seeds {text!r}: at most 1000 seeds")
