@@ -419,6 +419,9 @@ def test_train_flags_out_of_bounds_are_one_line_exit_2_before_anything_is_writte
         (["--seeds", "0", "--out", "OUT", "--steps", str(10**20)], "--steps"),
         (["--seeds", str(2**64), "--out", "OUT"], "--seeds"),
         (["--seeds", "0", "--out", "FILE"], "not a folder"),
+        # Training flags: checked as train checks them before any seed trains (they failed in each child, exit 1).
+        (["--seeds", "0", "--out", "OUT", "--hidden", "0"], "hidden"),
+        (["--seeds", "0", "--out", "OUT", "--steps", "100", "--preset", "pixels", "--teacher", "/dev/zero"], "device"),
     ],
 )
 def test_seeds_flags_out_of_bounds_are_refused_before_any_training(args, named, tmp_path, capsys):

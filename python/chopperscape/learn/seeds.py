@@ -437,6 +437,16 @@ def main(argv: list[str] | None = None) -> int:
     if os.path.lexists(a.out) and not a.out.is_dir():
         p.error(f"--out {a.out} is not a folder")
     forward = forward + [x for o in a.option for x in ("--option", o)]
+    # Every training flag checked here, as `train` will (exit 2 naming it), before any seed is trained.
+    from . import train
+
+    first = ["--out", str(a.out / f"seed-{seeds[0]}"), "--seed", str(seeds[0]), "--steps", str(a.steps)]
+    _, recipe = train.parse([*first, "--force", *forward])
+    if recipe.teacher:
+        try:
+            train.load_teacher(recipe)
+        except ValueError as err:
+            p.error(str(err))
     # What makes two runs of a seed the same run: a stored evaluation counts only if all of it matches.
     key = {"steps": a.steps, "train_args": forward, "episodes": a.eval_episodes, "seed": a.eval_seed}
     try:

@@ -471,13 +471,9 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     return model_path
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
-        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
-        from . import seeds
-
-        return seeds.main(args)
+def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
+    """The command line's flags and the recipe they make, every setting checked (exit 2 through argparse, naming
+    the setting): what `main` trains, and what the seed runner checks before it trains any seed."""
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=__doc__.splitlines()[0])
     p.add_argument(
         "--out",
@@ -533,7 +529,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="CNN recipes: read frames as frame / 255 (chopperscape 0.1.0), not 1 - frame / 255",
     )
-    p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="start over in an --out folder that already holds a run (that run is first moved into OUT/replaced-N)",
+    )
     a = p.parse_args(args)
     preset = dict(PRESETS[a.preset])
     allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
@@ -554,6 +554,17 @@ def main(argv: list[str] | None = None) -> int:
         check_run_folder(a.out, a.force)
     except ValueError as e:
         p.error(str(e))
+    return a, recipe
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
+        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
+        from . import seeds
+
+        return seeds.main(args)
+    a, recipe = parse(args)
     try:
         path = train(recipe, a.out, a.minutes, force=a.force)
     except ValueError as e:  # an env option the env refuses
