@@ -76,6 +76,12 @@ def test_every_option_train_takes_round_trips_through_evaluate_and_export(name, 
         assert ev.main([str(run / "model.pt"), "--episodes", "2"]) == 0
         out = json.loads(capsys.readouterr().out)
         assert out["max_episode_steps"] == 30 and out["mean_steps"] <= 30
+        # A model trained without one is evaluated to the usual 10,000 steps: evaluation ends.
+        payload = torch.load(run / "model.pt", weights_only=True)
+        payload["recipe"]["env_options"]["max_episode_steps"] = None
+        torch.save(payload, tmp_path / "none.pt")
+        assert ev.main([str(tmp_path / "none.pt"), "--episodes", "1", "--option", "max_fuel=30"]) == 0
+        assert "max_episode_steps" not in json.loads(capsys.readouterr().out)
     assert ex.main([str(run / "model.pt"), "--out", str(tmp_path / "m.onnx")]) == 0, capsys.readouterr().err
     result = json.loads(capsys.readouterr().out)
     assert result["checked"] is True
@@ -196,6 +202,10 @@ def test_export_to_a_full_disk_or_under_a_file_is_one_line_and_writes_nothing(tm
     assert "is not a folder" in one_line(capsys.readouterr().err)
     assert ex.main([str(src), "--out", str(tmp_path), "--no-check"]) == 2
     assert "is a folder" in one_line(capsys.readouterr().err)
+    # The model itself as --out, even with --force: refused, the model kept.
+    before = src.read_bytes()
+    assert ex.main([str(src), "--out", str(src), "--force", "--no-check"]) == 2
+    assert "is the model file itself" in one_line(capsys.readouterr().err) and src.read_bytes() == before
     fail_with_enospc(monkeypatch)
     assert ex.main([str(src), "--out", str(tmp_path / "m.onnx"), "--no-check"]) == 1
     line = one_line(capsys.readouterr().err)

@@ -16,7 +16,8 @@ only for files whose author you trust.
 
 Episode ``k`` is played on seed ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or
 to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``; a recipe model trained with
-``--option max_episode_steps=N`` plays to its own ``N`` unless ``--option`` gives another), with the greedy action
+``--option max_episode_steps=N`` plays to its own ``N`` unless ``--option`` gives another; one trained with ``none``
+to 10,000), with the greedy action
 (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
 
     {"model": ..., "episodes": 100, "seed": 1000000, "mean_return": ..., "std_return": ..., "min_return": ...,
@@ -364,8 +365,9 @@ def main(argv: list[str] | None = None) -> int:
 
             video.check_destination(Path(a.video))
         act, play_options = load_policy(a.model, a.stochastic, a.seed, options, trust_pickle=a.trust_pickle)
-        # The model's own truncation (a recipe model trained with max_episode_steps) unless --option gives one.
-        if given or "max_episode_steps" not in play_options:
+        # The model's own truncation (a recipe model trained with max_episode_steps=N) unless --option gives one;
+        # a model trained without one (`none`) is still evaluated to 10,000 steps, so that evaluation ends.
+        if given or play_options.get("max_episode_steps") is None:
             play_options["max_episode_steps"] = limit
         limit = play_options["max_episode_steps"]
         for i, r in enumerate(iter_episodes(act, a.episodes, a.seed, play_options, keep_actions=keep)):

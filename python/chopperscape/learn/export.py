@@ -153,6 +153,8 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         raise ValueError(f"--out {str(out)!r} is a folder: give the ONNX file to write (NAME.onnx)")
     if os.path.lexists(out) and not force:
         raise ValueError(f"--out {str(out)!r} exists: pass --force to replace it")
+    if os.path.lexists(out) and os.path.lexists(model) and os.path.samefile(out, model):
+        raise ValueError(f"--out {str(out)!r} is the model file itself: give another name (NAME.onnx)")
     payload, agent, norm, options, env_shape = load(model)
     obs_type = payload["recipe"]["obs_type"]
     module = _policy_module(agent, norm, payload_shape(payload), env_shape)
