@@ -90,3 +90,26 @@ def check_reset_options(options: Any) -> None:
             f"reset options {names!r} are not supported: ChopperScape's reset takes no options "
             "(a partial reset with options['reset_mask'] is not supported either)"
         )
+
+
+def regular_file(path: Any, what: str, max_bytes: int | None = None) -> int:
+    """The size of `path`, a regular file (symbolic links followed) of at most `max_bytes`; `ValueError` starting
+    with `what` (which names the file) and saying why not: it does not exist, cannot be read, is a folder, a device
+    (/dev/zero), a pipe or a socket, or is too large. Nothing is read."""
+    import os
+    import stat
+
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise ValueError(f"{what} does not exist") from None
+    except OSError as e:
+        raise ValueError(f"{what} cannot be read: {e.strerror or e}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"{what} is a folder, not a file")
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else "a pipe or a socket"
+        raise ValueError(f"{what} is {kind}, not a regular file")
+    if max_bytes is not None and st.st_size > max_bytes:
+        raise ValueError(f"{what} is {st.st_size:,} bytes, more than the {max_bytes:,} allowed")
+    return int(st.st_size)

@@ -90,8 +90,16 @@ def print_line(text: str) -> int:
     (`| head -0`) 141 with nothing more said (as the `chopperscape` command line and `yes | head` end), or 1 with
     one line on standard error for any other write error (`> /dev/full`). Never a traceback: standard output is
     pointed at /dev/null afterwards, so Python's own flush at exit cannot fail either."""
+    return print_chunks([text])
+
+
+def print_chunks(chunks: Iterable[str]) -> int:
+    """`print_line` of the text the `chunks` make together, written as they come (a long line held nowhere
+    whole)."""
     try:
-        sys.stdout.write(text + "\n")
+        for chunk in chunks:
+            sys.stdout.write(chunk)
+        sys.stdout.write("\n")
         sys.stdout.flush()
         return 0
     except BrokenPipeError:

@@ -53,6 +53,7 @@ try:
 except ImportError as err:  # pragma: no cover - exercised only without SB3
     raise ImportError("chopperscape.integrations.sb3 needs Stable-Baselines3: pip install stable-baselines3") from err
 
+from .. import _atomic
 from .._checks import check_reset_options, core_seed
 from ..vector import VectorEnv
 
@@ -313,13 +314,7 @@ def save_normalization(vec_normalize: Any, path: str | os.PathLike) -> None:
         "clip_obs": float(vec_normalize.clip_obs),
         "epsilon": float(vec_normalize.epsilon),
     }
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
-    try:
-        tmp.write_text(json.dumps(doc))
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    _atomic.write_text(path, json.dumps(doc))
 
 
 def load_normalization(

@@ -15,13 +15,17 @@ and plain data), and the pickled parts of an SB3 ``.zip`` are replaced by what t
 only for files whose author you trust.
 
 Episode ``k`` is played on seed ``S + k`` (the seeds of a ``VectorEnv`` reset with ``seed=S``), each to its end or
-to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``), with the greedy action
+to the 10,000-step truncation (``--option max_episode_steps=N``, or ``none``; a recipe model trained with
+``--option max_episode_steps=N`` plays to its own ``N`` unless ``--option`` gives another; one trained with ``none``
+to 10,000), with the greedy action
 (``--stochastic`` samples instead, from a generator seeded with ``S``). The output:
 
     {"model": ..., "episodes": 100, "seed": 1000000, "mean_return": ..., "std_return": ..., "min_return": ...,
      "max_return": ..., "mean_steps": ..., "causes": {"bird": 0.62, "fuel": 0.08, "truncated": 0.30}, ...}
 
-where ``causes`` gives the share of episodes that ended each way (``--per-episode`` adds each episode's seed,
+Memory does not grow with ``--episodes`` (at most 1,000,000): episodes are played ``CHUNK`` at a time and summarised
+as they end, and the ``--per-episode`` rows wait in a temporary file until the line is written. ``causes`` gives
+the share of episodes that ended each way (``--per-episode`` adds each episode's seed,
 return, steps and cause: the episodes ``chopperscape demo --policy MODEL.onnx --json`` plays for the same
 ``--seed``, from the export of the same model).
 
@@ -35,35 +39,47 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import itertools
 import json
+import math
 import sys
+import tempfile
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from .._cli import env_options, print_line
+from .._checks import regular_file
+from .._cli import env_options, print_chunks, print_line
 from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
+from .recipe import MAX_MODEL_BYTES
 
 #: Most environments stepped together while evaluating (bounded memory, whatever `--episodes`).
 CHUNK = 128
+#: The most episodes one evaluation plays (`--episodes`): hours of CPU, constant memory.
+MAX_EPISODES = 1_000_000
 
 
-def play_episodes(
+def iter_episodes(
     act: Callable[[np.ndarray, VectorEnv], np.ndarray],
     episodes: int,
     seed: int,
     env_options: dict[str, Any],
     max_episode_steps: int | None = 10_000,
     keep_actions: int = 0,
-) -> list[dict[str, Any]]:
+) -> Iterator[dict[str, Any]]:
     """Plays `episodes` episodes on seeds `seed, seed + 1, …` with `act(obs_batch, envs) -> actions` (`envs`, the
-    `VectorEnv` being played, is for built-in policies that read the game); one dict each (`seed`, `return`, `steps`,
-    `cause`, and for the first `keep_actions` episodes `actions`, the list of actions taken)."""
+    `VectorEnv` being played, is for built-in policies that read the game) and yields one dict each, in seed order
+    (`seed`, `return`, `steps`, `cause`, and for the first `keep_actions` episodes `actions`, the list of actions
+    taken). At most `CHUNK` episodes are played at once and nothing of a chunk is kept once it is yielded, so the
+    memory does not grow with `episodes`."""
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"invalid value {episodes!r} for `episodes`: allowed an integer >= 1")
-    results: list[dict[str, Any]] = []
+    if "max_episode_steps" in env_options:
+        env_options = dict(env_options)
+        max_episode_steps = env_options.pop("max_episode_steps")
     for first in range(0, episodes, CHUNK):
         n = min(CHUNK, episodes - first)
         envs = VectorEnv(n, num_threads=1, max_episode_steps=max_episode_steps, **env_options)
@@ -89,30 +105,70 @@ def play_episodes(
                 live &= ~ended
         finally:
             envs.close()
-        results += [
-            {"seed": seed + first + i, "return": int(ret[i]), "steps": int(steps[i]), "cause": causes[i]}
-            for i in range(n)
-        ]
-        for i, taken in enumerate(kept):
-            results[first + i]["actions"] = taken
-    return results
+        for i in range(n):
+            row: dict[str, Any] = {"seed": seed + first + i, "return": int(ret[i]), "steps": int(steps[i])}
+            row["cause"] = causes[i]
+            if i < len(kept):
+                row["actions"] = kept[i]
+            yield row
 
 
-def summary(results: list[dict[str, Any]]) -> dict[str, Any]:
-    """Mean, spread and end causes of a list of `play_episodes` results."""
-    rets = np.array([r["return"] for r in results], dtype=np.float64)
-    causes: dict[str, float] = {}
+def play_episodes(
+    act: Callable[[np.ndarray, VectorEnv], np.ndarray],
+    episodes: int,
+    seed: int,
+    env_options: dict[str, Any],
+    max_episode_steps: int | None = 10_000,
+    keep_actions: int = 0,
+) -> list[dict[str, Any]]:
+    """:func:`iter_episodes` as a list (one dict per episode: for a few hundred episodes; the command line
+    streams them)."""
+    return list(iter_episodes(act, episodes, seed, env_options, max_episode_steps, keep_actions))
+
+
+class Summary:
+    """Mean, spread and end causes of episodes added one at a time (:meth:`add`), in constant memory: returns and
+    steps are integers, so their sums are exact and the order they come in does not matter."""
+
+    def __init__(self) -> None:
+        self.n = 0
+        self.sum = self.sum_sq = self.steps = 0
+        self.min: int | None = None
+        self.max: int | None = None
+        self.causes: dict[str, int] = {}
+
+    def add(self, r: dict[str, Any]) -> None:
+        ret = int(r["return"])
+        self.n += 1
+        self.sum += ret
+        self.sum_sq += ret * ret
+        self.steps += int(r["steps"])
+        self.min = ret if self.min is None else min(self.min, ret)
+        self.max = ret if self.max is None else max(self.max, ret)
+        self.causes[str(r["cause"])] = self.causes.get(str(r["cause"]), 0) + 1
+
+    def result(self) -> dict[str, Any]:
+        n = self.n
+        if n == 0:
+            raise ValueError("no episodes to summarise")
+        var = (n * self.sum_sq - self.sum * self.sum) / (n * n)  # exact integers until this division
+        return {
+            "episodes": n,
+            "mean_return": round(self.sum / n, 1),
+            "std_return": round(math.sqrt(max(var, 0.0)), 1),
+            "min_return": self.min,
+            "max_return": self.max,
+            "mean_steps": round(self.steps / n, 1),
+            "causes": {k: round(v / n, 3) for k, v in sorted(self.causes.items())},
+        }
+
+
+def summary(results: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    """Mean, spread and end causes of `play_episodes` results (:class:`Summary`)."""
+    acc = Summary()
     for r in results:
-        causes[r["cause"]] = causes.get(r["cause"], 0) + 1 / len(results)
-    return {
-        "episodes": len(results),
-        "mean_return": round(float(rets.mean()), 1),
-        "std_return": round(float(rets.std()), 1),
-        "min_return": int(rets.min()),
-        "max_return": int(rets.max()),
-        "mean_steps": round(float(np.mean([r["steps"] for r in results])), 1),
-        "causes": {k: round(v, 3) for k, v in sorted(causes.items())},
-    }
+        acc.add(r)
+    return acc.result()
 
 
 class _BuiltinPlayer:
@@ -142,7 +198,8 @@ REFUSED_OPTIONS = {
 
 def observation_shape(options: dict[str, Any]) -> tuple[int, ...]:
     """The observation shape of one env with `options` (a `ValueError` naming a bad option)."""
-    envs = VectorEnv(1, num_threads=1, max_episode_steps=None, **options)
+    options = {"max_episode_steps": None, **options}
+    envs = VectorEnv(1, num_threads=1, **options)
     try:
         return tuple(envs.single_observation_space.shape or ())
     finally:
@@ -160,11 +217,12 @@ def load_policy(
     if isinstance(model, str) and model in NAMES:
         return _BuiltinPlayer(model), {"obs_type": "features", **env_options}
     path = Path(model)
-    if not path.is_file():
+    if not path.exists() and not path.is_symlink():
         raise ValueError(
             f"model file {str(path)!r} does not exist (give a model.pt from chopperscape.learn.train, an SB3 .zip, "
             f"or a built-in policy: {', '.join(NAMES)})"
         )
+    regular_file(path, f"model file {str(path)!r}", MAX_MODEL_BYTES)
     needs = ("torch", "stable_baselines3") if path.suffix == ".zip" else ("torch",)
     missing = [m for m in needs if importlib.util.find_spec(m) is None]
     if missing:
@@ -287,43 +345,65 @@ def main(argv: list[str] | None = None) -> int:
         "loaded, so only for files whose author you trust",
     )
     a = p.parse_args(argv)
-    if a.episodes < 1:
-        p.error(f"--episodes {a.episodes}: allowed an integer >= 1")
+    if not 1 <= a.episodes <= MAX_EPISODES:
+        p.error(f"--episodes {a.episodes}: allowed an integer in 1..={MAX_EPISODES}")
     if not 0 <= a.seed < 2**63:
         p.error(f"--seed {a.seed}: allowed 0 <= seed < 2**63")
     if not 1 <= a.video_episodes <= a.episodes:
         p.error(f"--video-episodes {a.video_episodes}: allowed 1..=--episodes ({a.episodes})")
     options = env_options(p, a.option, refused=REFUSED_OPTIONS)
+    given = "max_episode_steps" in options
     limit = options.pop("max_episode_steps", 10_000)
+    keep = a.video_episodes if a.video is not None else 0
+    acc = Summary()
+    kept: list[dict[str, Any]] = []
+    # The per-episode rows wait in a temporary file, not in memory, until the result line is written.
+    rows = tempfile.TemporaryFile("w+", encoding="utf-8") if a.per_episode else None
     try:
         if a.video is not None:
             from . import video
 
             video.check_destination(Path(a.video))
         act, play_options = load_policy(a.model, a.stochastic, a.seed, options, trust_pickle=a.trust_pickle)
-        keep = a.video_episodes if a.video is not None else 0
-        results = play_episodes(act, a.episodes, a.seed, play_options, max_episode_steps=limit, keep_actions=keep)
+        # The model's own truncation (a recipe model trained with max_episode_steps=N) unless --option gives one;
+        # a model trained without one (`none`) is still evaluated to 10,000 steps, so that evaluation ends.
+        if given or play_options.get("max_episode_steps") is None:
+            play_options["max_episode_steps"] = limit
+        limit = play_options["max_episode_steps"]
+        for i, r in enumerate(iter_episodes(act, a.episodes, a.seed, play_options, keep_actions=keep)):
+            acc.add(r)
+            if i < keep:
+                kept.append(r)
+            if rows is not None:
+                rows.write(("" if i == 0 else ", ") + json.dumps({k: v for k, v in r.items() if k != "actions"}))
         if a.video is not None:
-            video.write(Path(a.video), play_options, results[:keep])
+            try:
+                video.write(Path(a.video), play_options, kept)
+            except OSError as err:
+                print(f"error: cannot write {a.video}: {err.strerror or err}", file=sys.stderr)
+                return 1
+        out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
+        if not isinstance(act, _BuiltinPlayer):
+            out["greedy"] = not a.stochastic
+        if limit != 10_000:
+            out["max_episode_steps"] = limit
+        out.update(acc.result())
+        tail = {"video": a.video} if a.video is not None else {}
+        if rows is None:
+            return print_line(json.dumps({**out, **tail}))
+        rows.seek(0)
+        head = json.dumps(out)[:-1] + ', "per_episode": ['
+        end = "]" + (", " + json.dumps(tail)[1:] if tail else "}")
+        return print_chunks(itertools.chain([head], iter(lambda: rows.read(1 << 16), ""), [end]))
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except OSError as err:
-        print(f"error: cannot write {a.video}: {err}", file=sys.stderr)
+    except OSError as err:  # the temporary file of the per-episode rows
+        print(f"error: cannot hold the per-episode rows in a temporary file: {err.strerror or err}", file=sys.stderr)
         return 1
-    for r in results:
-        r.pop("actions", None)
-    out: dict[str, Any] = {"model": str(a.model), "seed": a.seed}
-    if not isinstance(act, _BuiltinPlayer):
-        out["greedy"] = not a.stochastic
-    if limit != 10_000:
-        out["max_episode_steps"] = limit
-    out.update(summary(results))
-    if a.per_episode:
-        out["per_episode"] = results
-    if a.video is not None:
-        out["video"] = a.video
-    return print_line(json.dumps(out))
+    finally:
+        if rows is not None:
+            rows.close()
 
 
 if __name__ == "__main__":

@@ -23,16 +23,20 @@ The file's ``metadata_props`` say what the policy takes (the Rust loader refuses
     pixels_version    the pixel layout it learned (chopperscape.PIXELS_VERSION)
     source_sha256     the SHA-256 of MODEL
 
-After writing, the export is checked: its logits must equal torch's within 1e-5 on 1,000 observations recorded by
-playing the env with the policy (with ``onnxruntime`` when it is installed; otherwise the check is skipped and
-says so: ``pip install onnxruntime``). Exit status 0, or 2 with one line on standard error (a missing file, a
-file that is not a recipe model, an existing ``--out`` without ``--force``), 1 if the check fails.
+The export is built and checked in memory before anything is written: its logits must equal torch's within 1e-5 on
+1,000 observations recorded by playing the env with the policy (with ``onnxruntime`` when it is installed;
+otherwise the check is skipped and says so: ``pip install onnxruntime``); then ``--out`` is written whole or not at
+all (:mod:`chopperscape._atomic`). Exit status 0, or 2 with one line on standard error naming the input (a missing
+file, a folder or a device, a file that is not a recipe model, an ``--out`` under a file or that is a folder, an
+existing ``--out`` without ``--force``), 1 if the check fails or ``--out`` cannot be written (a read-only folder, a
+full disk: nothing is left behind).
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
+import io
 import json
 import os
 import sys
@@ -42,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _atomic
 from .._cli import print_line
 
 #: The format written into `metadata_props["format"]` (the Rust crate reads this one).
@@ -68,9 +73,9 @@ def load(path: Path):
     from .model import from_payload, read_checkpoint
 
     what = f"model file {str(path)!r}"
-    if not path.is_file():
+    if not os.path.lexists(path):
         raise ValueError(f"{what} does not exist (give a model.pt from python -m chopperscape.learn.train)")
-    payload = read_checkpoint(path, what)
+    payload = read_checkpoint(path, what)  # a regular file of a model's size, tensors and plain data
     agent, model_shape, norm, recipe = from_payload(payload, what)
     # The env's own observation (the Rust env has no `keep_dim`: a grayscale frame without a channel axis).
     options = {k: v for k, v in recipe["env_options"].items() if k != "keep_dim"}
@@ -142,9 +147,14 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
 
     out_dir = out.parent if str(out.parent) else Path(".")
     if not out_dir.is_dir():
-        raise ValueError(f"--out {str(out)!r}: the folder {str(out_dir)!r} does not exist")
+        why = "is not a folder" if os.path.lexists(out_dir) else "does not exist"
+        raise ValueError(f"--out {str(out)!r}: {str(out_dir)!r} {why}")
+    if out.is_dir():
+        raise ValueError(f"--out {str(out)!r} is a folder: give the ONNX file to write (NAME.onnx)")
     if os.path.lexists(out) and not force:
         raise ValueError(f"--out {str(out)!r} exists: pass --force to replace it")
+    if os.path.lexists(out) and os.path.lexists(model) and os.path.samefile(out, model):
+        raise ValueError(f"--out {str(out)!r} is the model file itself: give another name (NAME.onnx)")
     payload, agent, norm, options, env_shape = load(model)
     obs_type = payload["recipe"]["obs_type"]
     module = _policy_module(agent, norm, payload_shape(payload), env_shape)
@@ -166,46 +176,50 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         **{k: str(v) for k, v in versions.items()},
         "source_sha256": _sha256(model),
     }
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.part")
+    # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
+    # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
+    # Built in memory and checked there; the file is written once, whole (`_atomic`), or not at all.
+    buffer = io.BytesIO()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        torch.onnx.export(
+            module,
+            (example,),
+            buffer,  # type: ignore[arg-type]  # file objects are taken (torch.onnx.export docs: `f`)
+            input_names=["obs"],
+            output_names=["logits"],
+            dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}},
+            opset_version=OPSET,
+            dynamo=False,
+        )
+    graph = onnx.load_from_string(buffer.getvalue())
+    del graph.metadata_props[:]
+    for key, value in metadata.items():
+        graph.metadata_props.add(key=key, value=value)
+    graph.producer_name = "chopperscape.learn.export"
+    onnx.checker.check_model(graph)
+    data = graph.SerializeToString()
+    result: dict[str, Any] = {
+        "model": str(model),
+        "out": str(out),
+        "obs_type": obs_type,
+        "obs_shape": list(env_shape),
+        "bytes": len(data),
+    }
+    if check:
+        result.update(check_export(data, payload, agent, norm, options))
     try:
-        # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
-        # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            torch.onnx.export(
-                module,
-                (example,),
-                str(tmp),
-                input_names=["obs"],
-                output_names=["logits"],
-                dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}},
-                opset_version=OPSET,
-                dynamo=False,
-            )
-        graph = onnx.load(str(tmp))
-        del graph.metadata_props[:]
-        for key, value in metadata.items():
-            graph.metadata_props.add(key=key, value=value)
-        graph.producer_name = "chopperscape.learn.export"
-        onnx.checker.check_model(graph)
-        onnx.save(graph, str(tmp))
-        result: dict[str, Any] = {
-            "model": str(model),
-            "out": str(out),
-            "obs_type": obs_type,
-            "obs_shape": list(env_shape),
-            "bytes": tmp.stat().st_size,
-        }
-        if check:
-            result.update(check_export(tmp, payload, agent, norm, options))
-        os.replace(tmp, out)
-    finally:
-        if os.path.lexists(tmp):
-            os.unlink(tmp)
+        _atomic.write_bytes(out, data)
+    except OSError as e:
+        raise ExportWriteError(f"cannot write --out {str(out)!r}: {e.strerror or e}; nothing was written") from None
     return result
 
 
-def check_export(path: Path, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:
+class ExportWriteError(OSError):
+    """The export could not be written (a read-only folder, a full disk): the message names `--out`."""
+
+
+def check_export(onnx_model: bytes, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:
     """Compares the export's logits with torch's on `CHECK_OBSERVATIONS` recorded observations; `RuntimeError`
     when they differ by more than `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime."""
     try:
@@ -217,7 +231,7 @@ def check_export(path: Path, payload: dict[str, Any], agent, norm, options: dict
     obs = record_observations(payload, agent, norm, options)
     with torch.no_grad():
         expected = agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload)))).numpy()
-    session = onnxruntime.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    session = onnxruntime.InferenceSession(onnx_model, providers=["CPUExecutionProvider"])
     got = session.run(["logits"], {"obs": obs})[0]
     diff = float(np.max(np.abs(got - expected)))
     if not diff <= CHECK_TOLERANCE:
@@ -245,7 +259,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except RuntimeError as err:
+    except (RuntimeError, OSError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
     return print_line(json.dumps(result))

@@ -9,7 +9,10 @@ cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it 
 from __future__ import annotations
 
 import math
-import os
+import pickle
+import re
+import warnings
+import zipfile
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, NamedTuple, TypeVar, cast
@@ -25,8 +28,10 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
     ) from err
 
-from .. import FEATURES_VERSION, PIXELS_VERSION, _signals
-from .recipe import Recipe, network_of
+from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic, _signals
+from .._checks import regular_file
+from .._cli import ENV_OPTIONS
+from .recipe import MAX_MODEL_BYTES, RESERVED_OPTIONS, Recipe, network_of
 
 #: The checkpoint format this module writes and reads.
 FORMAT = "chopperscape-ppo/1"
@@ -228,6 +233,7 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
     recipe = payload.get("recipe")
     if not isinstance(recipe, dict) or not isinstance(recipe.get("env_options", {}), dict):
         raise bad("recipe", "must be the recipe's settings (a dict with env_options)")
+    check_env_options(recipe.get("env_options", {}), what)
     obs_dim, hidden = payload.get("obs_dim"), recipe.get("hidden")
     for field, value in (("obs_dim", obs_dim), ("recipe.hidden", hidden), ("num_actions", payload.get("num_actions"))):
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 1 << 24:
@@ -252,15 +258,37 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
             "it, or use the chopperscape version it was trained with"
         )
     network = network_of(recipe)
-    try:
-        # 0.1.0's models have no `invert_frames`: they read plain frames.
-        agent = build_agent(network, tuple(shape), 5, int(hidden or 0), recipe.get("invert_frames", False) is True)
-    except ValueError as e:
-        raise bad("recipe.network", str(e)) from None
+    if not isinstance(network, str):
+        raise bad("recipe.network", "must be a network's name")
+    # 0.1.0's models have no `invert_frames`: they read plain frames.
+    invert = recipe.get("invert_frames", False) is True
     for part in ("actor", "critic"):
         state = payload.get(part)
         if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
             raise bad(part, "must be a dict of tensors")
+    # The network the recipe claims, built on the meta device (shapes, no memory): its sizes must be those of the
+    # weights in the file before the real one is built, so a small file cannot claim a network of gigabytes.
+    try:
+        with torch.device("meta"):
+            shaped = build_agent(network, tuple(shape), 5, int(hidden or 0), invert)
+    except ValueError as e:
+        raise bad("recipe.network", str(e)) from None
+    for part in ("actor", "critic"):
+        state = payload[part]
+        want = {k: tuple(v.shape) for k, v in getattr(shaped, part).state_dict().items()}
+        have = {k: tuple(v.shape) for k, v in state.items()}
+        if want != have:
+            diff = sorted(set(want) ^ set(have)) or [k for k in want if want[k] != have[k]]
+            k = diff[0]
+            raise bad(
+                part,
+                f"does not fit the {network} network (hidden {hidden}) on observations of shape {tuple(shape)}: "
+                f"`{k}` is {list(have[k]) if k in have else 'missing'} where the network has "
+                f"{list(want[k]) if k in want else 'no such weight'}",
+            )
+    agent = build_agent(network, tuple(shape), 5, int(hidden or 0), invert)
+    for part in ("actor", "critic"):
+        state = payload[part]
         try:
             getattr(agent, part).load_state_dict(state)
         except RuntimeError as e:
@@ -269,6 +297,24 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
                 f"does not fit the {network} network on observations of shape {tuple(shape)}: {str(e).splitlines()[0]}",
             ) from None
     return agent.eval()
+
+
+def check_env_options(options: dict[str, Any], what: str) -> None:
+    """`ValueError` naming a model's recipe env option that no env takes, or one the recipe sets itself (`obs_type`,
+    `num_threads`, `autoreset_mode`, `copy`, `render_mode`: a trainer of this package never saves them); the
+    values are checked by the env that is made with them."""
+    for name, value in options.items():
+        if name in RESERVED_OPTIONS or name not in ENV_OPTIONS:
+            why = "no env option of that name" if name not in ENV_OPTIONS else RESERVED_OPTIONS[name]
+            raise ValueError(
+                f"{what} is not a usable chopperscape.learn.train model: `recipe.env_options` holds `{name}` ({why})"
+            )
+        plain = (str, int, float, bool, type(None))
+        if not isinstance(value, plain) and not (isinstance(value, list) and all(isinstance(v, plain) for v in value)):
+            raise ValueError(
+                f"{what} is not a usable chopperscape.learn.train model: `recipe.env_options.{name}` is a "
+                f"{type(value).__name__}, not an option value"
+            )
 
 
 def _plain(value: Any) -> Any:
@@ -309,27 +355,48 @@ def save(
         "actor": {k: v.detach().cpu() for k, v in agent.actor.state_dict().items()},
         "critic": {k: v.detach().cpu() for k, v in agent.critic.state_dict().items()},
     }
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
-    with _signals.deferred(f"the model is saved in {path}"):
-        try:
-            torch.save(payload, tmp)
-            os.replace(tmp, path)
-        finally:
-            if os.path.lexists(tmp):
-                os.unlink(tmp)
+    with _signals.deferred(f"the model is saved in {path}"), _atomic.replacing(path) as tmp:
+        torch.save(payload, tmp)
+
+
+#: Terminal escape sequences (colours, bold), which some torch versions put in their messages.
+_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+
+
+def _reason(err: BaseException) -> str:
+    """The line of a `torch.load` error that says what went wrong, without terminal codes or torch's advice."""
+    text = _ANSI.sub("", str(err))
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    for line in lines:  # weights_only's refusal: the offending global or opcode, not the paragraph before it
+        if "GLOBAL" in line or line.startswith(("Unsupported", "Trying to load")):
+            return line.rstrip(".")
+    useful = [line for line in lines if not line.startswith(("Weights only load failed", "Check the documentation"))]
+    return (useful[0] if useful else type(err).__name__).rstrip(".")[:300]
 
 
 def read_checkpoint(path: Path, what: str) -> Any:
     """The payload of a recipe model file, read with `torch.load(weights_only=True)` (tensors and plain data only: a
-    crafted file cannot run code); `ValueError` in one line when the file is damaged or holds more."""
-    try:
-        return torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as err:
-        first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+    crafted file cannot run code); `ValueError` in one line naming the file and the reason when it is not a regular
+    file of at most `MAX_MODEL_BYTES`, is damaged, or holds more."""
+    regular_file(path, what, MAX_MODEL_BYTES)
+    if not zipfile.is_zipfile(path):
         raise ValueError(
-            f"{what} is not a chopperscape.learn.train model (it holds more than tensors and plain data, "
-            f"or is damaged): {first}"
+            f"{what} is not a chopperscape.learn.train model: it is not a zip archive, the form torch.save writes"
+        )
+    try:
+        with warnings.catch_warnings():  # torch's notes on pickle protocols: the refusal below says what matters
+            warnings.simplefilter("ignore")
+            return torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as err:
+        raise ValueError(
+            f"{what} is not a chopperscape.learn.train model: it holds more than tensors and plain data "
+            f"({_reason(err)}), and is refused because unpickling it could run code"
         ) from None
+    except Exception as err:
+        reason = _reason(err)
+        if len(reason) < 20:  # `KeyError: '105'` says nothing without its type
+            reason = f"{type(err).__name__}: {reason}"
+        raise ValueError(f"{what} is not a chopperscape.learn.train model: it is damaged ({reason})") from None
 
 
 class Model(NamedTuple):
@@ -351,13 +418,17 @@ def from_payload(payload: Any, what: str = "the checkpoint") -> Model:
     if rms is not None:
         try:
             norm.rms = RunningMeanStd.from_state(rms)
-            ok = norm.rms.mean.shape == shape and norm.rms.var.shape == shape
-        except (KeyError, TypeError, ValueError):
+            mean = np.asarray(norm.rms.mean, dtype=np.float64)
+            var = np.asarray(norm.rms.var, dtype=np.float64)
+            ok = mean.shape == shape and var.shape == shape
+            ok = ok and bool(np.isfinite(mean).all() and np.isfinite(var).all() and (var >= 0).all())
+            norm.rms.mean, norm.rms.var = mean, var
+        except (KeyError, TypeError, ValueError, OverflowError):
             ok = False
         if not ok:
             raise ValueError(
                 f"{what} is not a usable chopperscape.learn.train model: `obs_rms` must hold a mean and a "
-                f"variance of shape {shape}"
+                f"variance of shape {shape}, finite numbers (variances >= 0)"
             )
     return Model(agent, shape, norm, recipe)
 

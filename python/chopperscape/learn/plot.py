@@ -15,6 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .. import _atomic
 from .progress import read
 
 
@@ -89,8 +90,13 @@ def main(argv: list[str] | None = None) -> int:
         ax.grid(alpha=0.3)
     fig.suptitle(a.title)
     fig.tight_layout()
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(a.out, dpi=110)
+    try:
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        with _atomic.replacing(a.out) as tmp:
+            fig.savefig(tmp, dpi=110, format=a.out.suffix.lstrip(".").lower() or "png")
+    except (OSError, ValueError) as err:  # an unwritable folder, a full disk, a format matplotlib lacks
+        print(f"error: cannot write {a.out}: {getattr(err, 'strerror', None) or err}", file=sys.stderr)
+        return 2 if isinstance(err, ValueError) else 1
     print(a.out)
     return 0
 

@@ -17,10 +17,13 @@ they have no per-update diagnostics of their own). Readers: ``python -m choppers
 from __future__ import annotations
 
 import csv
+import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, TextIO
+
+from .._checks import regular_file
 
 RETURNS = ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length")
 DIAGNOSTICS = ("learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss")
@@ -28,6 +31,8 @@ ENDINGS = ("ended", "bird", "fuel", "limit")
 GUIDANCE = ("aux_loss", "teacher_kl")
 #: The columns ``chopperscape.learn.train`` writes, in order.
 COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE
+#: The largest progress CSV read (a 15-million-step run of the recipe writes about 200 KB).
+MAX_BYTES = 64 << 20
 
 
 class Writer:
@@ -67,18 +72,37 @@ class Writer:
 
 def read(path: str | os.PathLike, columns: Sequence[str] = RETURNS) -> dict[str, list[float]]:
     """`columns` of one progress CSV as float lists, over the rows that have a return (rows before the first finished
-    episode have none); `ValueError` naming the file when a column is missing or no row has a return."""
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    episode have none); a blank cell is NaN. `ValueError` naming the file when it is not a regular UTF-8 file of at
+    most `MAX_BYTES`, is not a CSV, a column is missing, a cell is not a number (``nan`` and ``inf`` written out
+    are not), or no row has a return."""
+    regular_file(path, str(path), MAX_BYTES)
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.DictReader(f))
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a progress CSV (not UTF-8 text)") from None
+    except csv.Error as e:
+        raise ValueError(f"{path}: not a progress CSV ({e})") from None
+    except OSError as e:
+        raise ValueError(f"{path}: cannot be read: {e.strerror or e}") from None
     if not rows:
         raise ValueError(f"{path}: no rows")
     missing = [c for c in columns if c not in rows[0]]
     if missing:
         raise ValueError(f"{path}: missing columns {missing} (expected {','.join(RETURNS)}, ...)")
-    rows = [r for r in rows if r["mean_return"] not in ("", None)]
+    rows = [r for r in rows if r.get("mean_return") not in ("", None)]
     if not rows:
         raise ValueError(f"{path}: no finished episode yet")
-    try:
-        return {c: [float(r[c]) if r[c] != "" else float("nan") for r in rows] for c in columns}
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"{path}: not a progress CSV ({e})") from None
+
+    def number(row: int, column: str, text: str | None) -> float:
+        if text == "":
+            return float("nan")
+        try:
+            x = float(text)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            x = math.nan
+        if not math.isfinite(x):
+            raise ValueError(f"{path}: not a progress CSV (row {row}, column {column}: {text!r} is not a number)")
+        return x
+
+    return {c: [number(i + 1, c, r.get(c)) for i, r in enumerate(rows)] for c in columns}

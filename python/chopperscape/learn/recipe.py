@@ -81,6 +81,19 @@ PRESETS["fast"] = {
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
 PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
+#: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
+#: model's claimed network must also fit the weights it holds before it is built (`model.agent_from_checkpoint`).
+MAX_MODEL_BYTES = 1 << 30
+
+#: The widest MLP the recipe trains (`hidden`), and the largest step budget (`--steps`; years of CPU).
+MAX_HIDDEN = 4096
+MAX_TOTAL_STEPS = 10**12
+#: The most memory the rollout buffers of one update may take (`num_envs` x `num_steps` observations and their
+#: numbers), checked once the observation's size is known, before anything is allocated or written.
+MAX_ROLLOUT_BYTES = 8 << 30
+#: The most parameters a network may have (1 GiB of float32 weights; the pixel recipe's CNN has 0.7 million).
+MAX_PARAMETERS = 1 << 28
+
 #: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core. A preset may
 #: carry its own (`total_steps`); `--steps` wins over both.
 DEFAULT_STEPS = 15_000_000
@@ -180,9 +193,12 @@ def check_device(device: Any) -> None:
 def check_recipe(recipe: Recipe) -> None:
     """`ValueError` naming the first setting of `recipe` that is out of range (before anything is written)."""
     r = recipe
-    for name in ("num_envs", "num_steps", "update_epochs", "num_minibatches", "total_steps"):
+    for name in ("num_envs", "num_steps", "num_minibatches"):
         positive_int(name, getattr(r, name))
-    positive_int("hidden", r.hidden, maximum=1 << 16)
+    positive_int("total_steps", r.total_steps, maximum=MAX_TOTAL_STEPS)
+    positive_int("update_epochs", r.update_epochs, maximum=1000)
+    # Two hidden x hidden layers per network: 4096 is 2 x 64 MiB of weights, 65536 was 2 x 16 GiB.
+    positive_int("hidden", r.hidden, maximum=MAX_HIDDEN)
     positive_int("torch_threads", r.torch_threads, maximum=1024)
     positive_int("env_threads", r.env_threads, maximum=1024)
     if r.num_minibatches * 4 > r.num_envs * r.num_steps:

@@ -21,7 +21,10 @@ Other trainers' runs (SB3, RLlib) are summarised the same way from their files: 
 ``DIR/seed-K.eval.json`` (``python -m chopperscape.learn.evaluate`` output, or ``rllib_ppo.py --eval-out``) and
 ``DIR/seed-K.csv`` (a progress CSV with ``env_steps`` and ``mean_return``) for every ``K`` there, evaluates the
 baselines on the same held-out seeds (kept in ``DIR/baseline-NAME.json``) and writes the same three files into
-``DIR``; ``--title`` names the trainer in the plot:
+``DIR``; ``--title`` names the trainer in the plot. Every file is checked before anything is played or written
+(:func:`read_eval`, :func:`_curve`): one that is not a regular UTF-8 file, lacks a field, holds a value of the wrong
+kind, NaN, Infinity or a number out of range, or a curve whose steps do not increase, is refused by name (exit 2)
+and nothing is written; ``summary.json`` is always valid JSON:
 
     python -m chopperscape.learn.seeds --summarise docs/curves/rllib-3seeds --steps 5000000 --title "RLlib PPO"
 
@@ -37,7 +40,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
+import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -46,12 +51,17 @@ from typing import Any
 
 import numpy as np
 
+from .. import _atomic
+from .._checks import regular_file
+from .._cli import print_line
 from . import progress
 
 #: Held-out evaluation: 100 episodes from seed 1,000,000 (training seeds are small numbers).
 EVAL_EPISODES, EVAL_SEED = 100, 1_000_000
 #: Bootstrap resamples (rliable's default).
 RESAMPLES = 50_000
+#: What a summary reads of each evaluation JSON.
+EVAL_FIELDS = ("mean_return", "std_return", "min_return", "max_return", "mean_steps", "episodes", "seed", "causes")
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -69,8 +79,10 @@ def parse_seeds(text: str) -> list[int]:
             b = int(hi) if dash else a
         except ValueError:
             raise ValueError(f"--seeds {text!r}: {item!r} is not a seed or a range (e.g. 0-9 or 0,3,5)") from None
-        if a < 0 or b < a or b - a >= 1000:
-            raise ValueError(f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST with at most 1000 seeds")
+        if a < 0 or b < a or b - a >= 1000 or b >= 2**64:
+            raise ValueError(
+                f"--seeds {text!r}: {item!r} must be 0 <= FIRST <= LAST with at most 1000 seeds, each < 2**64"
+            )
         seeds.update(dict.fromkeys(range(a, b + 1)))
     if len(seeds) > 1000:
         raise ValueError(f"--seeds {text!r}: at most 1000 seeds")
@@ -130,22 +142,20 @@ def _evaluate(model: str, out: Path, episodes: int, seed: int, options: list[str
     ]
     for o in options:
         cmd += ["--option", o]
-    tmp = out.with_name(f".{out.name}.part")
-    with open(tmp, "w") as f, open(log, "a") as err:
-        done = subprocess.run(cmd, stdout=f, stderr=err)
-    if done.returncode != 0:
-        tmp.unlink(missing_ok=True)
-        raise RuntimeError(f"evaluating {model} failed ({done.returncode}); see {log}")
-    os.replace(tmp, out)
-    return json.loads(out.read_text())
+    with _atomic.replacing(out) as tmp:
+        with open(tmp, "w") as f, open(log, "a") as err:
+            done = subprocess.run(cmd, stdout=f, stderr=err)
+        if done.returncode != 0:
+            raise RuntimeError(f"evaluating {model} failed ({done.returncode}); see {log}")
+    return read_eval(out)
 
 
 def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[str, Any]) -> dict[str, Any]:
     """Trains and evaluates one seed unless its evaluation with the same settings is already there."""
     run = a.out / f"seed-{seed}"
     done = run / "eval.json"
-    if done.is_file():
-        prev = json.loads(done.read_text())
+    if os.path.lexists(done):
+        prev = read_eval(done)
         if prev.get("runner") == key:
             return prev
     run.mkdir(parents=True, exist_ok=True)
@@ -168,9 +178,7 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
         str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option, run / "train.log"
     )
     result["runner"] = key
-    tmp = run / ".eval.json.part"
-    tmp.write_text(json.dumps(result))
-    os.replace(tmp, done)
+    _atomic.write_text(done, json.dumps(result, allow_nan=False))
     (run / ".eval-raw.json").unlink(missing_ok=True)
     return result
 
@@ -178,22 +186,94 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
 def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
     path = a.out / f"baseline-{name}.json"
     key = {"episodes": a.eval_episodes, "seed": a.eval_seed, "option": a.option}
-    if path.is_file():
-        prev = json.loads(path.read_text())
+    if os.path.lexists(path):
+        prev = read_eval(path, f"{path} (a cached baseline: remove it to evaluate {name} again)")
         if prev.get("runner") == key:
             return prev
     result = _evaluate(
         name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.option, a.out / f"baseline-{name}.log"
     )
     result["runner"] = key
-    path.write_text(json.dumps(result))
+    _atomic.write_text(path, json.dumps(result, allow_nan=False))
     (a.out / f".baseline-{name}.raw").unlink(missing_ok=True)
     return result
 
 
+#: The largest evaluation JSON read (100 episodes with `--per-episode` are 10 KB).
+MAX_EVAL_BYTES = 16 << 20
+#: The largest number a summary takes from a file (returns, steps): far beyond any game, far below float overflow.
+MAX_NUMBER = 1e15
+
+
+def _json_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _json_float(text: str) -> float:
+    x = float(text)
+    if not math.isfinite(x):
+        raise ValueError(f"{text} is out of range")
+    return x
+
+
+def read_eval(path: Path, what: str | None = None) -> dict[str, Any]:
+    """An evaluation JSON (`python -m chopperscape.learn.evaluate`'s line) read and checked: a regular UTF-8 file of
+    at most `MAX_EVAL_BYTES` holding an object with every field a summary reads, of the right kind (finite numbers
+    in range; no NaN or Infinity). `ValueError` naming the file (or `what`) and the first thing wrong."""
+    what = what or str(path)
+    regular_file(path, what, MAX_EVAL_BYTES)
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_EVAL_BYTES + 1)
+        if len(data) > MAX_EVAL_BYTES:
+            raise ValueError(f"more than {MAX_EVAL_BYTES:,} bytes")
+        doc = json.loads(data.decode("utf-8"), parse_constant=_json_constant, parse_float=_json_float)
+    except OSError as e:
+        raise ValueError(f"{what}: cannot be read: {e.strerror or e}") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{what}: not an evaluation JSON (not UTF-8 text)") from None
+    except (ValueError, RecursionError) as e:
+        raise ValueError(f"{what}: not an evaluation JSON ({str(e)[:200]})") from None
+
+    def bad(field: str, expected: str) -> ValueError:
+        return ValueError(f"{what}: not an evaluation JSON (`{field}` must be {expected})")
+
+    if not isinstance(doc, dict):
+        raise ValueError(f"{what}: not an evaluation JSON (an object with mean_return, episodes, ... expected)")
+    missing = [k for k in EVAL_FIELDS if k not in doc]
+    if missing:
+        raise ValueError(f"{what}: not an evaluation JSON (no {', '.join(missing)})")
+    for k in ("mean_return", "std_return", "min_return", "max_return", "mean_steps"):
+        v = doc[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not abs(v) <= MAX_NUMBER:
+            raise bad(k, f"a number of at most {MAX_NUMBER:g} in size")
+    for k in ("std_return", "mean_steps"):
+        if doc[k] < 0:
+            raise bad(k, ">= 0")
+    for k, low in (("episodes", 1), ("seed", 0)):
+        v = doc[k]
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v < 2**63:
+            raise bad(k, f"an integer in {low}..2**63")
+    causes = doc["causes"]
+    if not isinstance(causes, dict) or not all(
+        isinstance(c, str) and isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= 1
+        for c, v in causes.items()
+    ):
+        raise bad("causes", "an object of shares in [0, 1]")
+    return doc
+
+
 def _curve(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A run's training curve (env steps, mean return), checked: finite, env steps increasing; `ValueError`
+    naming the file."""
+    regular_file(path, str(path), progress.MAX_BYTES)
     cols = progress.read(path, ("env_steps", "mean_return"))
-    return np.array(cols["env_steps"]), np.array(cols["mean_return"])
+    x, y = np.array(cols["env_steps"]), np.array(cols["mean_return"])
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        raise ValueError(f"{path}: env_steps and mean_return must be numbers in every row that has a return")
+    if (np.abs(y) > MAX_NUMBER).any() or (x < 0).any() or (x > MAX_NUMBER).any() or (np.diff(x) <= 0).any():
+        raise ValueError(f"{path}: env_steps must increase from row to row (>= 0) and returns be in range")
+    return x, y
 
 
 def summarise(results: dict[int, dict[str, Any]], baselines: dict[str, dict[str, Any]], steps: int) -> dict[str, Any]:
@@ -299,13 +379,17 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any], title: str =
     ax.grid(alpha=0.3)
     fig.tight_layout()
     path = out / "curves.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with _atomic.replacing(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
     return path
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .recipe import DEFAULT_STEPS
+    from .evaluate import MAX_EPISODES
+    from .recipe import DEFAULT_STEPS, MAX_TOTAL_STEPS
 
     p = argparse.ArgumentParser(
         prog="python -m chopperscape.learn.seeds",
@@ -327,8 +411,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
     a, forward = p.parse_known_args(argv)
-    if a.steps < 1 or a.eval_episodes < 1 or a.eval_seed < 0:
-        p.error("--steps and --eval-episodes must be >= 1, --eval-seed >= 0")
+    if not 1 <= a.steps <= MAX_TOTAL_STEPS:
+        p.error(f"--steps {a.steps}: allowed an integer in 1..={MAX_TOTAL_STEPS}")
+    if not 1 <= a.eval_episodes <= MAX_EPISODES:
+        p.error(f"--eval-episodes {a.eval_episodes}: allowed an integer in 1..={MAX_EPISODES}")
+    if not 0 <= a.eval_seed < 2**63:
+        p.error(f"--eval-seed {a.eval_seed}: allowed 0 <= seed < 2**63")
+    if a.jobs is not None and not 1 <= a.jobs <= 1024:
+        p.error(f"--jobs {a.jobs}: allowed an integer in 1..=1024")
     if a.summarise is not None:
         if a.seeds or a.out or forward:
             p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
@@ -344,21 +434,37 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         p.error(str(err))
     jobs = a.jobs or max(1, min(len(seeds), os.cpu_count() or 1))
-    if jobs < 1:
-        p.error(f"--jobs {a.jobs}: allowed an integer >= 1")
+    if os.path.lexists(a.out) and not a.out.is_dir():
+        p.error(f"--out {a.out} is not a folder")
     forward = forward + [x for o in a.option for x in ("--option", o)]
+    # Every training flag checked here, as `train` will (exit 2 naming it), before any seed is trained.
+    from . import train
+
+    first = ["--out", str(a.out / f"seed-{seeds[0]}"), "--seed", str(seeds[0]), "--steps", str(a.steps)]
+    _, recipe = train.parse([*first, "--force", *forward])
+    if recipe.teacher:
+        try:
+            train.load_teacher(recipe)
+        except ValueError as err:
+            p.error(str(err))
     # What makes two runs of a seed the same run: a stored evaluation counts only if all of it matches.
     key = {"steps": a.steps, "train_args": forward, "episodes": a.eval_episodes, "seed": a.eval_seed}
-    a.out.mkdir(parents=True, exist_ok=True)
+    try:
+        a.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        p.error(f"--out {a.out}: cannot make the folder: {e.strerror or e}")
     try:
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             futures = {s: pool.submit(_seed_run, s, a, forward, key) for s in seeds}
             base = {name: pool.submit(_baseline, name, a) for name in ("random", "heuristic")}
             results = {s: f.result() for s, f in futures.items()}
             baselines = {name: f.result() for name, f in base.items()}
-    except RuntimeError as err:
+    except (RuntimeError, OSError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
+    except ValueError as err:  # a stored evaluation that is not one
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     curves = {s: a.out / f"seed-{s}" / "progress.csv" for s in seeds}
     return write_summary(a.out, results, baselines, curves, a.steps, a.title)
 
@@ -371,55 +477,67 @@ def write_summary(
     steps: int,
     title: str,
 ) -> int:
-    """Writes `summary.json`, `summary.md` and `curves.png` into `out` and prints the table; 0."""
+    """Writes `summary.json`, `summary.md` and `curves.png` into `out` and prints the table; 0. Everything is
+    computed before the first file is written, and each file is written whole (`_atomic`); 1 with one line if a
+    file cannot be written."""
     summary = summarise(results, baselines, steps)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "summary.md").write_text(markdown(summary))
-    plot(out, curves, summary, title)
-    print(markdown(summary))
-    return 0
+    text, table = json.dumps(summary, indent=2, allow_nan=False) + "\n", markdown(summary)
+    try:
+        plot(out, curves, summary, title)
+        _atomic.write_text(out / "summary.md", table)
+        _atomic.write_text(out / "summary.json", text)
+    except OSError as e:
+        print(f"error: cannot write the summary into {out}: {e.strerror or e}", file=sys.stderr)
+        return 1
+    return print_line(table)
 
 
 def summarise_folder(a: argparse.Namespace) -> int:
-    """`--summarise DIR`: the summary of another trainer's seeds from `DIR/seed-K.eval.json` and `DIR/seed-K.csv`."""
+    """`--summarise DIR`: the summary of another trainer's seeds from `DIR/seed-K.eval.json` and `DIR/seed-K.csv`.
+    Every file is read and checked before anything is written or played: a bad one (not a regular file, not UTF-8,
+    a field missing or of the wrong kind, NaN or Infinity, a number out of range, a curve whose steps do not
+    increase) is refused with its name, exit 2, and nothing is written."""
     folder: Path = a.summarise
-    evals = sorted(folder.glob("seed-*.eval.json")) if folder.is_dir() else []
+    if not folder.is_dir():
+        print(f"error: {folder} has no seed-K.eval.json to summarise (it is not a folder)", file=sys.stderr)
+        return 2
     results: dict[int, dict[str, Any]] = {}
-    for path in evals:
-        name = path.name[len("seed-") : -len(".eval.json")]
-        if not name.isdigit():
-            continue
-        try:
-            result = json.loads(path.read_text())
-            missing = [k for k in ("mean_return", "std_return", "episodes", "seed", "causes") if k not in result]
-        except (OSError, ValueError) as err:
-            print(f"error: {path}: not an evaluation JSON ({err})", file=sys.stderr)
-            return 2
-        if missing:
-            print(f"error: {path}: not an evaluation JSON (no {', '.join(missing)})", file=sys.stderr)
-            return 2
-        if (result["episodes"], result["seed"]) != (a.eval_episodes, a.eval_seed):
-            print(
-                f"error: {path} played {result['episodes']} episodes from seed {result['seed']}; this summary is "
-                f"of {a.eval_episodes} from {a.eval_seed} (give --eval-episodes and --eval-seed)",
-                file=sys.stderr,
-            )
-            return 2
-        results[int(name)] = result
-    if not results:
-        print(f"error: {folder} has no seed-K.eval.json to summarise", file=sys.stderr)
+    curves: dict[int, Path] = {}
+    try:
+        for path in sorted(folder.glob("seed-*.eval.json")):
+            name = path.name[len("seed-") : -len(".eval.json")]
+            if not re.fullmatch(r"0|[1-9][0-9]{0,18}", name):
+                continue
+            result = read_eval(path)
+            if (result["episodes"], result["seed"]) != (a.eval_episodes, a.eval_seed):
+                raise ValueError(
+                    f"{path} played {result['episodes']} episodes from seed {result['seed']}; this summary is "
+                    f"of {a.eval_episodes} from {a.eval_seed} (give --eval-episodes and --eval-seed)"
+                )
+            results[int(name)] = result
+        if not results:
+            raise ValueError(f"{folder} has no seed-K.eval.json to summarise")
+        for s in results:
+            curve = folder / f"seed-{s}.csv"
+            if not os.path.lexists(curve):
+                raise ValueError(f"no training curve for every seed: {curve} missing")
+            _curve(curve)
+            curves[s] = curve
+        a.out, a.option = folder, []
+        for name in ("random", "heuristic"):
+            if os.path.lexists(folder / f"baseline-{name}.json"):
+                read_eval(folder / f"baseline-{name}.json")
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
         return 2
-    curves = {s: folder / f"seed-{s}.csv" for s in results}
-    lost = [str(c) for c in curves.values() if not c.is_file()]
-    if lost:
-        print(f"error: no training curve for every seed: {', '.join(lost)} missing", file=sys.stderr)
-        return 2
-    a.out, a.option = folder, []
     try:
         baselines = {name: _baseline(name, a) for name in ("random", "heuristic")}
     except RuntimeError as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     return write_summary(folder, results, baselines, curves, a.steps, a.title)
 
 

@@ -18,7 +18,11 @@ Training seeds are ``seed, seed + 1, …`` (one per env); evaluate on other seed
 
 Runs are reproducible: every schedule (the learning rate) follows env steps over the step budget ``--steps``, never
 the wall clock, so the same seed and budget give the same curve on any host; ``--minutes`` only stops a run early.
-A folder that already holds a run is refused unless ``--force`` (which starts the run over in it). Every setting is
+A folder that already holds a run is refused unless ``--force``, which first moves that run whole into
+``OUT/replaced-N`` (the first free N; stderr says where) and only then starts the new run there: a run folder never
+mixes files of two runs, even if the new run is killed before its first save, and the old run is never lost.
+``recipe.json`` and ``model.pt`` are written whole or not at all (:mod:`chopperscape._atomic`); a file that cannot be
+written (a read-only folder, a full disk) ends the run with one line naming it (exit 1). Every setting is
 checked before anything is written; a loss that is not finite stops the run before the optimiser step, so the saved
 model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
 reached so far atomically, and exits with 130, 143, 129.
@@ -30,17 +34,20 @@ Pixel recipes learn here with a features teacher: ``--preset pixels --teacher mo
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
 import time
 from collections import deque
+from collections.abc import Iterator
 from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from .. import _core, _signals
+from .. import _atomic, _core, _signals
 from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
@@ -48,9 +55,12 @@ from .model import CnnAgent, Model, ObsNormalizer, RunningMeanStd, build_agent, 
 from .phases import OFF, Phases
 from .recipe import (
     DEFAULT_STEPS,
+    MAX_PARAMETERS,
+    MAX_ROLLOUT_BYTES,
     PRESETS,
     RECIPE_FLAGS,
     RESERVED_OPTIONS,
+    RUN_FILES,
     Recipe,
     check_minutes,
     check_recipe,
@@ -88,7 +98,7 @@ def load_teacher(recipe: Recipe) -> Model:
     """The features model `recipe.teacher` names, checked to guide this recipe: a features MLP trained on the same
     rules (frame skip included). `ValueError` in one line otherwise; the file is read as data
     (`torch.load(weights_only=True)`), never run."""
-    if not Path(recipe.teacher).is_file():
+    if not os.path.lexists(recipe.teacher):
         raise ValueError(f"teacher {recipe.teacher!r}: no such file (give a features model.pt from this trainer)")
     teacher = load(Path(recipe.teacher), f"teacher {recipe.teacher!r}")
     if teacher.recipe["obs_type"] != "features" or len(teacher.obs_shape) != 1:
@@ -103,6 +113,70 @@ def load_teacher(recipe: Recipe) -> Model:
             f"({mine or 'the defaults'}): train the teacher with the same rules options, frame_skip included"
         )
     return teacher
+
+
+class RunWriteError(OSError):
+    """A file of the run could not be written (a read-only folder, a full disk): the message names it."""
+
+
+@contextlib.contextmanager
+def _writing(path: Path, after: str = "") -> Iterator[None]:
+    """`OSError` in the block as a `RunWriteError` naming `path` (and what is kept, `after`)."""
+    try:
+        yield
+    except RunWriteError:
+        raise
+    except OSError as e:
+        raise RunWriteError(f"cannot write {path}: {e.strerror or e}{after}") from None
+
+
+def _next_aside(out: Path) -> Path:
+    """The first free `OUT/replaced-N` (N = 1, 2, …): where `--force` keeps the run it replaces."""
+    n = 1
+    while os.path.lexists(out / f"replaced-{n}"):
+        n += 1
+    return out / f"replaced-{n}"
+
+
+def start_run(out: Path, recipe: Recipe) -> tuple[progress.Writer, Path | None]:
+    """Makes the run folder `out` ready for a new run and writes its `recipe.json` and the progress header:
+    a run already there (`--force`) is first moved whole into `OUT/replaced-N`, so that `out` never holds files of
+    two runs. Returns the progress writer and where the old run went (None if there was none). On a write
+    error (`RunWriteError`, `ValueError` for an `out` that cannot be a folder), nothing new is left behind and an
+    old run is moved back."""
+    made = not os.path.lexists(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"--out {out}: cannot make the folder: {e.strerror or e}") from None
+    old = [name for name in RUN_FILES if os.path.lexists(out / name)]
+    aside = _next_aside(out) if old else None
+    moved: list[str] = []
+    try:
+        if aside is not None:
+            with _writing(aside):
+                aside.mkdir()
+                for name in old:
+                    os.replace(out / name, aside / name)
+                    moved.append(name)
+        with _writing(out / "recipe.json"):
+            _atomic.write_text(out / "recipe.json", json.dumps(asdict(recipe), indent=2) + "\n")
+        with _writing(out / "progress.csv"):
+            return progress.Writer(out / "progress.csv"), aside
+    except BaseException:
+        for name in ("progress.csv", "recipe.json"):
+            with contextlib.suppress(OSError):
+                if name not in old or name in moved:
+                    os.unlink(out / name)
+        for name in moved:
+            with contextlib.suppress(OSError):
+                os.replace(aside / name, out / name)  # type: ignore[operator]
+        with contextlib.suppress(OSError):
+            if aside is not None:
+                aside.rmdir()
+            if made:
+                out.rmdir()
+        raise
 
 
 def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False, phases: Phases = OFF) -> Path:
@@ -124,6 +198,16 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     obs_shape = tuple(envs.single_observation_space.shape or ())
     network = network_of(recipe)
     device = torch.device(recipe.device)
+    size = 0
+    if network != "mlp":  # a CNN's size grows with the frames: measured on the meta device, taking no memory
+        with torch.device("meta"):
+            size = sum(p.numel() for p in build_agent(network, obs_shape, 5, recipe.hidden).parameters())
+    if size > MAX_PARAMETERS:
+        envs.close()
+        raise ValueError(
+            f"the {network} network on observations of shape {obs_shape} would have {size:,} parameters, more than "
+            f"{MAX_PARAMETERS:,}: smaller observations (obs_size), fewer stacked frames or a smaller network"
+        )
     agent = build_agent(network, obs_shape, 5, recipe.hidden, recipe.invert_frames).to(device)
     # --- Guidance from the game's features (pixel recipes: `aux_coef > 0`, `teacher`) ---------------------------
     # A twin env with `features` observations, reset with the same seeds and stepped with the same actions, is in
@@ -143,6 +227,13 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             twin_options.update({k: v for k, v in seen if k not in RULE_OPTIONS and k != "obs_type"})
         twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
         feat_dim = int((twin.single_observation_space.shape or (0,))[0])
+        if teacher is not None and tuple(teacher.obs_shape) != (feat_dim,):
+            envs.close()
+            twin.close()
+            raise ValueError(
+                f"teacher {recipe.teacher!r} takes observations of shape {teacher.obs_shape}, but its env options "
+                f"give ({feat_dim},): it is not a model this trainer wrote"
+            )
     if recipe.aux_coef > 0 and cnn is not None:
         feat_norm = ObsNormalizer((feat_dim,), True)
         with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
@@ -164,6 +255,17 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
 
     # --- Rollout storage -------------------------------------------------------------------------------------
     n, t_len = recipe.num_envs, recipe.num_steps
+    # Each stored step: its observation (twice: the buffer and the update's batch), the twin's features, the
+    # teacher's log-probabilities and seven numbers.
+    per_step = 2 * math.prod(obs_shape) * (1 if pixels else 4) + 4 * (2 * feat_dim + 5 + 7)
+    if n * t_len * per_step > MAX_ROLLOUT_BYTES:
+        envs.close()
+        if twin is not None:
+            twin.close()
+        raise ValueError(
+            f"invalid values {n} and {t_len} for options `num_envs` and `num_steps`: an update's rollout would take "
+            f"{n * t_len * per_step / 2**30:.1f} GiB, more than {MAX_ROLLOUT_BYTES >> 30} GiB: fewer envs or steps"
+        )
     buf_obs = torch.zeros((t_len, n, *obs_shape), dtype=torch.uint8 if pixels else torch.float32, device=device)
     buf_act = torch.zeros((t_len, n), dtype=torch.long, device=device)
     buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
@@ -196,10 +298,10 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     start = time.monotonic()
     model_path = out / "model.pt"
     csv_path = out / "progress.csv"
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "recipe.json", "w") as f:
-        json.dump(asdict(recipe), f, indent=2)
-    writer = progress.Writer(csv_path)
+    writer, aside = start_run(out, recipe)
+    if aside is not None:
+        print(f"note: --force: the run that was in {out} is kept in {aside}", file=sys.stderr)
+    kept = "; the model saved last is kept"
     update = 0
     stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
     phases.start()
@@ -361,29 +463,29 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 row["aux_loss"] = f"{m[6]:.5f}"
             if teacher is not None:
                 row["teacher_kl"] = f"{m[7]:.5f}"
-            writer.row(row)
+            with _writing(csv_path, kept):
+                writer.row(row)
             if update % 50 == 0:
-                save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+                with _writing(model_path, kept):
+                    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
             phases.lap("logging")
             phases.steps = env_steps
     finally:
-        writer.close()
+        with contextlib.suppress(OSError):
+            writer.close()
         envs.close()
         if twin is not None:
             twin.close()
         stop.restore()
-    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+    with _writing(model_path, kept):
+        save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
     return model_path
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
-        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
-        from . import seeds
-
-        return seeds.main(args)
+def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
+    """The command line's flags and the recipe they make, every setting checked (exit 2 through argparse, naming
+    the setting): what `main` trains, and what the seed runner checks before it trains any seed."""
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=__doc__.splitlines()[0])
     p.add_argument(
         "--out",
@@ -439,7 +541,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="CNN recipes: read frames as frame / 255 (chopperscape 0.1.0), not 1 - frame / 255",
     )
-    p.add_argument("--force", action="store_true", help="start over in an --out folder that already holds a run")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="start over in an --out folder that already holds a run (that run is first moved into OUT/replaced-N)",
+    )
     a = p.parse_args(args)
     preset = dict(PRESETS[a.preset])
     steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
@@ -462,13 +568,27 @@ def main(argv: list[str] | None = None) -> int:
         check_run_folder(a.out, a.force)
     except ValueError as e:
         p.error(str(e))
+    return a, recipe
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
+        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
+        from . import seeds
+
+        return seeds.main(args)
+    a, recipe = parse(args)
     try:
         path = train(recipe, a.out, a.minutes, force=a.force)
     except ValueError as e:  # an env option the env refuses
         print(f"error: {e}", file=sys.stderr)
         return 2
-    except FloatingPointError as e:
+    except (FloatingPointError, RuntimeError) as e:  # a loss that is not finite, a twin env out of step
         print(f"error: training stopped: {e}; the model saved last is kept", file=sys.stderr)
+        return 1
+    except RunWriteError as e:
+        print(f"error: {e}", file=sys.stderr)
         return 1
     except _signals.Interrupted as e:
         print(e, file=sys.stderr)

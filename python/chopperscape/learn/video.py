@@ -11,7 +11,6 @@ The file is written under a temporary name beside the destination and renamed wh
 
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 from collections.abc import Iterator
@@ -19,6 +18,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .. import _atomic
 
 #: Frames a second, as the command line's recordings.
 FPS = 30
@@ -47,8 +48,8 @@ def frames(options: dict[str, Any], episodes: list[dict[str, Any]]) -> Iterator[
     each action."""
     from ..env import ChopperScapeEnv
 
-    rules = {k: v for k, v in options.items() if k not in OBSERVATION_OPTIONS}
-    # The env itself never truncates: each episode's actions end where it ended.
+    # The env itself never truncates (it takes no max_episode_steps): each episode's actions end where it ended.
+    rules = {k: v for k, v in options.items() if k not in OBSERVATION_OPTIONS and k != "max_episode_steps"}
     env = ChopperScapeEnv(render_mode="rgb_array", obs_type="features", **rules)
     try:
         for episode in episodes:
@@ -64,15 +65,9 @@ def frames(options: dict[str, Any], episodes: list[dict[str, Any]]) -> Iterator[
 def write(path: Path, options: dict[str, Any], episodes: list[dict[str, Any]]) -> int:
     """Writes the episodes' frames to `path` (.gif or .mp4); returns the number of frames."""
     check_destination(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
-    try:
+    with _atomic.replacing(path) as tmp:
         source = frames(options, episodes)
-        count = _write_gif(tmp, source) if path.suffix.lower() == ".gif" else _write_mp4(tmp, source)
-        os.replace(tmp, path)
-    finally:
-        if os.path.lexists(tmp):
-            os.unlink(tmp)
-    return count
+        return _write_gif(tmp, source) if path.suffix.lower() == ".gif" else _write_mp4(tmp, source)
 
 
 def _delay_ms(i: int) -> int:
