@@ -153,7 +153,8 @@ pub fn model(proto: &ModelProto, file_len: usize) -> Result<(), PolicyError> {
         known(&t.name, n)?;
         values.insert(&t.name, Bound { rank: t.dims.len(), constant: Some(n) });
     }
-    values.entry(&inputs[0].name).or_insert(Bound { rank: MAX_RANK, constant: None });
+    // The observation, batched: tract is given [1, obs_shape...], and the metadata's shape has 1 to 3 sizes.
+    values.entry(&inputs[0].name).or_insert(Bound { rank: 4, constant: None });
     for node in &graph.node {
         let out = self::node(node, file_len, &values, &tensors)?;
         if node.op_type == "Constant"
@@ -307,7 +308,7 @@ fn node(
         "Constant" => Some(constant_value.and_then(|b| b.constant).unwrap_or_else(|| {
             node.attribute.iter().map(|a| a.ints.len().max(a.floats.len()).max(1) as u64).max().unwrap_or(1)
         })),
-        "Shape" => Some(MAX_RANK as u64),
+        "Shape" => Some(rank_of(0) as u64),
         _ if !all_known => None,
         "Concat" => Some(inputs.iter().map(known).fold(0u64, u64::saturating_add)),
         "Add" | "Sub" | "Mul" | "Div" | "Max" | "Min" | "MatMul" | "Gemm" | "Gather" => {

@@ -194,6 +194,27 @@ fn a_conv_with_huge_pads_is_refused() {
 }
 
 #[test]
+fn axes_and_perms_out_of_range_are_refused() {
+    // tract indexed out of bounds, divided by zero, or asked for 4 GB (an abort, on `perm` [0, 0]).
+    let cases = [
+        (node("Transpose", &["obs"], "logits", vec![ints("perm", &[0, 0])]), vec![], "perm = [0, 0]"),
+        (node("Transpose", &["obs"], "logits", vec![ints("perm", &[5, 0])]), vec![], "perm = [5, 0]"),
+        (node("Flatten", &["obs"], "logits", vec![int("axis", 9)]), vec![], "axis = 9"),
+        (node("Unsqueeze", &["obs", "a"], "logits", vec![]), vec![int64s("a", &[-70])], "names axes beyond the 8"),
+        (
+            node("Slice", &["obs", "a", "a", "b", "a"], "logits", vec![]),
+            vec![int64s("a", &[0]), int64s("b", &[1])],
+            "a step of 0",
+        ),
+        (node("Reshape", &["obs", "s"], "logits", vec![]), vec![int64s("s", &[1; 9])], "more than 8 axes"),
+    ];
+    for (node, weights, message) in cases {
+        let err = refused(message, &model(vec![node], weights)).to_string();
+        assert!(err.contains(message), "{err}");
+    }
+}
+
+#[test]
 fn values_that_multiply_to_terabytes_are_refused_before_they_are_made() {
     // Constants of 40 elements reshaped onto six distinct axes and added: tract computes such values while it
     // loads the graph (40^6 elements, 16 GB; 40^5 took 4 s and 400 MB before this was checked).
@@ -315,6 +336,31 @@ fn metadata_asking_for_huge_observations_is_refused_before_anything_is_allocated
         let err = refused(key, &with_metadata(&[(key, value)])).to_string();
         assert!(err.contains(&format!("`{key}`")), "{err}");
     }
+}
+
+#[test]
+fn the_shape_arithmetic_of_older_torch_exports_passes_the_limits() {
+    // `x.view(x.size(0), -1)` as the legacy exporter writes it: Shape, Gather, Unsqueeze, Concat, Reshape.
+    let nodes = vec![
+        node("Shape", &["obs"], "shape", vec![]),
+        node("Gather", &["shape", "zero"], "batch", vec![int("axis", 0)]),
+        node("Unsqueeze", &["batch", "axes"], "batch1", vec![]),
+        node("Concat", &["batch1", "minus_one"], "target", vec![int("axis", 0)]),
+        node("Reshape", &["obs", "target"], "flat", vec![]),
+        node("Slice", &["flat", "starts", "ends", "last"], "logits", vec![]),
+    ];
+    let zero = TensorProto { name: "zero".into(), data_type: 7, int64_data: vec![0], ..Default::default() };
+    let weights = vec![
+        zero,
+        int64s("axes", &[0]),
+        int64s("minus_one", &[-1]),
+        int64s("starts", &[0]),
+        int64s("ends", &[5]),
+        int64s("last", &[1]),
+    ];
+    let mut policy = Policy::from_bytes(&model(nodes, weights)).unwrap();
+    let obs = chopperscape::Observation::zeros(vec![46], chopperscape::Dtype::F32);
+    assert_eq!(policy.logits(&obs).unwrap(), [0.0; 5]);
 }
 
 #[test]
