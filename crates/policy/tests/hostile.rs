@@ -281,6 +281,27 @@ fn a_graph_that_costs_too_many_multiply_adds_is_refused() {
 }
 
 #[test]
+fn a_convolution_that_costs_too_many_multiply_adds_is_refused() {
+    // [46, 2048] from the observation (as above) as one 46 × 2048 image, convolved by 256 kernels of 8 × 64:
+    // 20 Mi output values, 40 Mi unfolded patches, 10 G multiply-adds.
+    let nodes = vec![
+        node("Reshape", &["obs", "s"], "col", vec![]),
+        node("MatMul", &["col", "row"], "wide", vec![]),
+        node("Reshape", &["wide", "image_shape"], "image", vec![]),
+        node("Conv", &["image", "w"], "conv", vec![ints("kernel_shape", &[8, 64])]),
+        node("Flatten", &["conv"], "logits", vec![]),
+    ];
+    let weights = vec![
+        int64s("s", &[46, 1]),
+        floats("row", &[1, 2048], &[1.0; 2048]),
+        int64s("image_shape", &[1, 1, 46, 2048]),
+        floats("w", &[256, 1, 8, 64], &vec![0.5; 256 * 8 * 64]),
+    ];
+    let err = refused("conv cost", &model(nodes, weights)).to_string();
+    assert!(err.contains("it costs more than 1073741824 multiply-adds for one observation (at \"conv"), "{err}");
+}
+
+#[test]
 fn wide_and_long_graphs_are_refused_at_once() {
     let inputs = vec!["obs"; 2000];
     let concat = node("Concat", &inputs, "logits", vec![int("axis", 1)]);
