@@ -20,7 +20,10 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for bin in $(sed -n 's/^name = "\(.*\)"$/\1/p' Cargo.toml | grep -v '^chopperscape-fuzz$'); do
   mkdir -p "$work/$bin"
-  if ! (cd "$work" && "$ROOT/fuzz/target/$host/release/$bin" "$work/$bin" -max_total_time="$seconds" \
+  # Committed seeds (fuzz/seeds/TARGET/), read as a second corpus; new inputs go to the scratch folder only.
+  seeds=()
+  if [ -d "$ROOT/fuzz/seeds/$bin" ]; then seeds=("$ROOT/fuzz/seeds/$bin"); fi
+  if ! (cd "$work" && "$ROOT/fuzz/target/$host/release/$bin" "$work/$bin" "${seeds[@]}" -max_total_time="$seconds" \
     -max_len=4096 >"$work/$bin.log" 2>&1); then
     cat "$work/$bin.log" >&2
     say "fuzz target $bin failed: the crashing input is above (rerun it with FUZZ_SECONDS=$seconds)"

@@ -1,18 +1,22 @@
-//! Policy files into the loader (`chopperscape-policy`): arbitrary bytes, or the committed policy with
-//! arbitrary bytes overwritten (so that the fuzzer reaches the graph and metadata checks, not only the protobuf
-//! decoder). Loading must return an error or a policy that acts on a zero observation; a panic inside tract is
-//! caught by the loader and is an error too, so the panic hook is silenced (a panic that escapes still aborts).
+//! Policy files into the loader (`chopperscape-policy`): arbitrary bytes, or one of the committed exports (the
+//! features MLP or the pixel CNN, `models/*.onnx`) with arbitrary bytes overwritten, so that the fuzzer reaches
+//! the graph, limit and metadata checks, not only the protobuf decoder. Seeds: `fuzz/seeds/policy_load/` (both
+//! exports unedited, and the hostile graphs of issue 32). Loading must return an error, or a policy that acts on a
+//! zero observation, within the loader's limits (`docs/limits.md`); a panic inside tract is caught by the loader
+//! and is an error too, and prints nothing (the loader silences the hook on its thread). A panic that escapes
+//! reaches libFuzzer's hook and aborts: a finding.
 #![no_main]
 use chopperscape::Observation;
 use chopperscape_policy::Policy;
 use libfuzzer_sys::fuzz_target;
 
-const MODEL: &[u8] = include_bytes!("../../models/ppo-features.onnx");
+const FEATURES: &[u8] = include_bytes!("../../models/ppo-features.onnx");
+const PIXELS: &[u8] = include_bytes!("../../models/ppo-pixels.onnx");
 
-/// The model with `edits` applied: each 3 bytes are an offset (u16, little-endian, scaled over the file) and
-/// the byte written there.
-fn edited(edits: &[u8]) -> Vec<u8> {
-    let mut bytes = MODEL.to_vec();
+/// `model` with `edits` applied: each 3 bytes are an offset (u16, little-endian, scaled over the file) and the
+/// byte written there.
+fn edited(model: &[u8], edits: &[u8]) -> Vec<u8> {
+    let mut bytes = model.to_vec();
     for e in edits.chunks_exact(3) {
         let at = usize::from(u16::from_le_bytes([e[0], e[1]])) * bytes.len() / 65536;
         bytes[at] = e[2];
@@ -21,10 +25,11 @@ fn edited(edits: &[u8]) -> Vec<u8> {
 }
 
 fuzz_target!(|data: &[u8]| {
-    static QUIET: std::sync::Once = std::sync::Once::new();
-    QUIET.call_once(|| std::panic::set_hook(Box::new(|_| {})));
+    // The first byte chooses: bit 0 clear, the bytes as they are; set, an export edited by the rest, the pixel
+    // CNN when bit 1 is set too (its graph and metadata lie in its first and last few KB; the offsets scale
+    // over the whole file, so most edits land in its weights).
     let bytes = match data.split_first() {
-        Some((mode, edits)) if mode & 1 == 1 => edited(edits),
+        Some((mode, edits)) if mode & 1 == 1 => edited(if mode & 2 == 2 { PIXELS } else { FEATURES }, edits),
         _ => data.to_vec(),
     };
     if let Ok(mut policy) = Policy::from_bytes(&bytes) {

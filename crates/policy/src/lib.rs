@@ -44,10 +44,19 @@ use tract_onnx::prelude::*;
 
 pub use error::PolicyError;
 pub use metadata::{FORMAT, Metadata, keys};
-pub use vet::{MAX_ELEMENTS, OPERATORS};
+pub use vet::{
+    MAX_ATTRIBUTES, MAX_ELEMENTS, MAX_GROUP, MAX_INITIALIZERS, MAX_MULTIPLY_ADDS, MAX_NODE_INPUTS, MAX_NODE_OUTPUTS,
+    MAX_NODES, MAX_RANK, MAX_WINDOW, OPERATORS,
+};
 
 /// The largest policy file read: 64 MiB (the recipe's MLP takes 0.1 MB, its CNN on 84 × 84 frames about 7 MB).
 pub const MAX_POLICY_BYTES: u64 = 64 << 20;
+
+/// The most elements one observation of a policy may have: 8 Mi (32 MiB of `f32`), checked on the metadata's
+/// `obs_shape` and on the observation its env options give, before the env or any observation is made. The
+/// recipe's pixel policy takes 84 × 84 × 4 = 28,224; the env's default `rgb` 600 × 800 stacked 4 deep takes
+/// 5.76 Mi. (Without it, `rgb_float` 4096 × 4096 in the metadata allocated 2 GB before it was refused.)
+pub const MAX_OBSERVATION_ELEMENTS: usize = 8 << 20;
 
 /// A loaded policy, ready to act. Not `Sync`: it keeps tract's run state between steps.
 pub struct Policy {
@@ -75,20 +84,81 @@ fn describe(dtype: Dtype, shape: &[usize]) -> String {
     format!("{} {shape:?}", dtype.as_str())
 }
 
-/// Runs `f`, turning a panic (inside tract) into [`PolicyError::Run`].
+/// `text` as one line of at most [`MAX_MESSAGE_CHARS`] characters: control characters (a newline in a node name
+/// or a metadata value) escaped, the rest cut with `…`. Every message built from a file's contents goes
+/// through here, so an error stays one line whatever the file holds.
+pub(crate) fn one_line(text: &str) -> String {
+    let mut out = String::new();
+    for (n, c) in text.chars().enumerate() {
+        if n == MAX_MESSAGE_CHARS {
+            out.push('…');
+            break;
+        }
+        if c.is_control() { out.extend(c.escape_default()) } else { out.push(c) }
+    }
+    out
+}
+
+/// The most characters of an error message taken from a file (a node name, a metadata value, tract's text): 400.
+const MAX_MESSAGE_CHARS: usize = 400;
+
+#[cfg(panic = "unwind")]
+mod quiet {
+    //! Silences the panic hook while tract runs on this thread, so that a panic inside tract (caught, and
+    //! returned as an error) prints nothing. One hook is installed for the whole process, the first time it is
+    //! needed; it forwards every panic to the hook it replaced, except on a thread that is inside [`quietly`].
+    //! Other threads' panics print as before. A hook set later by the program replaces this one (tract's panics
+    //! then print again, nothing else changes).
+    use std::cell::Cell;
+    use std::sync::Once;
+
+    thread_local! {
+        static QUIET: Cell<bool> = const { Cell::new(false) };
+    }
+
+    /// Runs `f` with this thread's panics silenced.
+    pub fn quietly<T>(f: impl FnOnce() -> T) -> T {
+        static INSTALL: Once = Once::new();
+        INSTALL.call_once(|| {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                if !QUIET.try_with(Cell::get).unwrap_or(false) {
+                    previous(info);
+                }
+            }));
+        });
+        /// Restores the flag even when `f` unwinds.
+        struct Restore(bool);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                QUIET.with(|q| q.set(self.0));
+            }
+        }
+        let _restore = Restore(QUIET.with(|q| q.replace(true)));
+        f()
+    }
+}
+
+/// Runs `f`, turning a panic (inside tract) into [`PolicyError::Run`], with the panic hook silenced on this thread
+/// (where panics unwind; where they abort, as in the browser, nothing can be caught).
 fn guarded<T>(f: impl FnOnce() -> Result<T, PolicyError>) -> Result<T, PolicyError> {
-    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|panic| {
+    let run = || catch_unwind(AssertUnwindSafe(f));
+    #[cfg(panic = "unwind")]
+    let result = quiet::quietly(run);
+    #[cfg(not(panic = "unwind"))]
+    let result = run();
+    result.unwrap_or_else(|panic| {
         let msg = panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
             .or_else(|| panic.downcast_ref::<String>().cloned())
             .unwrap_or_else(|| "the inference engine panicked".into());
-        Err(PolicyError::Run(msg))
+        Err(PolicyError::Run(one_line(&format!("the inference engine failed ({msg})"))))
     })
 }
 
 fn run_err(e: impl std::fmt::Display) -> PolicyError {
-    PolicyError::Run(format!("{e:#}"))
+    PolicyError::Run(one_line(&format!("{e:#}")))
 }
 
 impl Policy {
@@ -132,6 +202,21 @@ impl Policy {
             meta.check_versions()?;
             // The env options must make the observation the graph takes.
             let config = meta.config()?;
+            let elements = chopperscape::limits::observation_bytes(&config)
+                / match dtype_of(config.obs_type) {
+                    Dtype::U8 => 1,
+                    Dtype::F32 => 4,
+                };
+            if elements > MAX_OBSERVATION_ELEMENTS as u64 {
+                return Err(PolicyError::Metadata {
+                    key: keys::ENV_OPTIONS,
+                    problem: format!(
+                        "give {} observations of {elements} elements, more than the {MAX_OBSERVATION_ELEMENTS} a \
+                         policy may take",
+                        config.obs_type.as_str()
+                    ),
+                });
+            }
             let (env_dtype, env_shape) = observation_of(&config)?;
             let dtype = dtype_of(meta.obs_type);
             if env_shape != meta.obs_shape || env_dtype != dtype {
@@ -264,21 +349,72 @@ fn observation_of(config: &Config) -> Result<(Dtype, Vec<usize>), PolicyError> {
     Ok((space.dtype, space.shape.clone()))
 }
 
-/// Refuses a typed graph whose values are not all of known size, or hold more than [`MAX_ELEMENTS`] together.
+/// Refuses a typed graph whose values are not all of known size, have more than [`MAX_RANK`] axes, or hold more
+/// than [`MAX_ELEMENTS`] together (each `Conv`'s unfolded patches counted as values), or that costs more than
+/// [`MAX_MULTIPLY_ADDS`] per observation. Checked before tract optimises or runs the graph.
 fn bounded(model: &TypedModel) -> Result<(), PolicyError> {
-    let mut total = 0usize;
+    use tract_onnx::tract_core::ops::cnn::Conv;
+    use tract_onnx::tract_core::ops::einsum::EinSum;
+    let too_many = |node: &TypedNode, what: &str| {
+        PolicyError::NotPolicy(one_line(&format!("{what} for one observation (at {:?})", node.name)))
+    };
+    let shape_of = |node: &TypedNode, fact: &TypedFact| -> Result<Vec<u64>, PolicyError> {
+        let shape = fact.shape.as_concrete().ok_or_else(|| {
+            PolicyError::NotPolicy(one_line(&format!(
+                "the size of {:?} does not follow from the observation's",
+                node.name
+            )))
+        })?;
+        if shape.len() > MAX_RANK {
+            return Err(too_many(node, &format!("its values have more than {MAX_RANK} axes")));
+        }
+        Ok(shape.iter().map(|&d| d as u64).collect())
+    };
+    // u128 products of at most MAX_RANK sizes below 2^64 each cannot overflow once each factor is checked;
+    // saturating keeps that true for any input.
+    let product = |shape: &[u64]| shape.iter().fold(1u128, |n, &d| n.saturating_mul(u128::from(d)));
+    let mut total = 0u128;
+    let mut multiply_adds = 0u128;
     for node in model.nodes() {
         for output in &node.outputs {
-            let shape = output.fact.shape.as_concrete().ok_or_else(|| {
-                PolicyError::NotPolicy(format!("the size of {:?} does not follow from the observation's", node.name))
-            })?;
-            let n = shape.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
-            total = n.and_then(|n| total.checked_add(n)).filter(|&t| t <= MAX_ELEMENTS).ok_or_else(|| {
-                PolicyError::NotPolicy(format!(
-                    "its values hold more than {MAX_ELEMENTS} elements for one observation (at {:?}, shape {shape:?})",
-                    node.name
-                ))
-            })?;
+            total = total.saturating_add(product(&shape_of(node, &output.fact)?));
+        }
+        let input_shapes: Vec<Vec<u64>> = node
+            .inputs
+            .iter()
+            .map(|i| shape_of(node, model.outlet_fact(*i).map_err(run_err)?))
+            .collect::<Result<_, _>>()?;
+        if let Some(conv) = node.op_as::<Conv>() {
+            let out = product(&shape_of(node, &node.outputs[0].fact)?);
+            let kernel = product(&conv.pool_spec.kernel_shape.iter().map(|&k| k as u64).collect::<Vec<_>>());
+            let (cin, cout, group) =
+                (conv.input_channels() as u128, conv.output_channels().max(1) as u128, conv.group.max(1) as u128);
+            multiply_adds = multiply_adds.saturating_add(out.saturating_mul(cin / group).saturating_mul(kernel));
+            total = total.saturating_add((out / cout).saturating_mul(cin).saturating_mul(kernel));
+        } else if let Some(einsum) = node.op_as::<EinSum>() {
+            let input_shapes = &input_shapes;
+            // Every axis of the expression, at its size: the output's elements times the summed axes'.
+            let mut n = 1u128;
+            for axis in einsum.axes.iter_all_axes() {
+                let size = axis
+                    .inputs
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(ix, positions)| {
+                        positions.iter().filter_map(move |&p| input_shapes.get(ix).and_then(|s| s.get(p)))
+                    })
+                    .copied()
+                    .max()
+                    .unwrap_or(1);
+                n = n.saturating_mul(u128::from(size));
+            }
+            multiply_adds = multiply_adds.saturating_add(n);
+        }
+        if total > MAX_ELEMENTS as u128 {
+            return Err(too_many(node, &format!("its values hold more than {MAX_ELEMENTS} elements")));
+        }
+        if multiply_adds > u128::from(MAX_MULTIPLY_ADDS) {
+            return Err(too_many(node, &format!("it costs more than {MAX_MULTIPLY_ADDS} multiply-adds")));
         }
     }
     Ok(())

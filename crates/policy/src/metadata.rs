@@ -46,7 +46,7 @@ pub struct Metadata {
 }
 
 fn bad(key: &'static str, problem: impl Into<String>) -> PolicyError {
-    PolicyError::Metadata { key, problem: problem.into() }
+    PolicyError::Metadata { key, problem: crate::one_line(&problem.into()) }
 }
 
 impl Metadata {
@@ -113,6 +113,16 @@ fn parse_shape(text: &str) -> Result<Vec<usize>, PolicyError> {
     let v: Vec<u64> = serde_json::from_str(text).map_err(|_| bad(keys::OBS_SHAPE, problem))?;
     if !(1..=3).contains(&v.len()) || v.iter().any(|&d| !(1..=4096).contains(&d)) {
         return Err(bad(keys::OBS_SHAPE, problem));
+    }
+    let elements: u64 = v.iter().product();
+    if elements > crate::MAX_OBSERVATION_ELEMENTS as u64 {
+        return Err(bad(
+            keys::OBS_SHAPE,
+            format!(
+                "is {v:?}: {elements} elements, more than the {} a policy may take",
+                crate::MAX_OBSERVATION_ELEMENTS
+            ),
+        ));
     }
     Ok(v.into_iter().map(|d| d as usize).collect())
 }

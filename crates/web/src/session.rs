@@ -358,6 +358,36 @@ mod tests {
     }
 
     #[test]
+    fn a_hostile_policy_file_meets_the_loaders_limits() {
+        // The page loads policies through `Policy::from_bytes`, so the same checks run before tract (where a
+        // panic aborts the WebAssembly instance). The committed policy's graph with its first node's `Gemm`
+        // swapped for a `Conv` padded by 2^63 − 1 (the file of issue 32 that hung `demo`), and a chain of
+        // 4,000 nodes.
+        use prost::Message;
+        use tract_onnx::pb::{AttributeProto, ModelProto, NodeProto};
+        let mut m = ModelProto::decode(POLICY).unwrap();
+        let g = m.graph.as_mut().unwrap();
+        let gemm = g.node.iter_mut().find(|n| n.op_type == "Gemm").unwrap();
+        gemm.op_type = "Conv".into();
+        gemm.attribute =
+            vec![AttributeProto { name: "pads".into(), r#type: 7, ints: vec![i64::MAX; 2], ..Default::default() }];
+        let err = Session::with_policy(&m.encode_to_vec(), []).err().unwrap();
+        assert!(err.contains("has pads = [9223372036854775807, 9223372036854775807]"), "{err}");
+        let g = m.graph.as_mut().unwrap();
+        g.node = (0..4000)
+            .map(|i| NodeProto {
+                op_type: "Relu".into(),
+                input: vec![if i == 0 { "obs".into() } else { format!("r{}", i - 1) }],
+                output: vec![if i == 3999 { "logits".into() } else { format!("r{i}") }],
+                ..Default::default()
+            })
+            .collect();
+        let start = std::time::Instant::now();
+        let err = Session::with_policy(&m.encode_to_vec(), []).err().unwrap();
+        assert!(err.contains("the graph has 4000 nodes") && start.elapsed().as_secs() < 2, "{err}");
+    }
+
+    #[test]
     fn heuristic_flies_the_same_way_from_the_same_seed() {
         let run = || {
             let mut s = session(&[]);
