@@ -25,7 +25,8 @@ def test_the_fast_preset_trains_reloads_and_evaluates(tmp_path, capsys):
 
     recipe = replace(Recipe(**PRESETS["fast"]), num_envs=16, num_steps=32, total_steps=2048)
     path = train.train(recipe, tmp_path)
-    rows = list(csv.DictReader(open(tmp_path / "progress.csv")))
+    with open(tmp_path / "progress.csv") as f:
+        rows = list(csv.DictReader(f))
     assert rows and int(rows[-1]["env_steps"]) >= 2048
     assert all(math.isfinite(float(v)) for r in rows for k, v in r.items() if v and k != "wall_s")
     saved = json.loads((tmp_path / "recipe.json").read_text())
@@ -37,7 +38,8 @@ def test_the_fast_preset_trains_reloads_and_evaluates(tmp_path, capsys):
 
 
 def test_the_preset_is_the_command_lines(tmp_path):
-    """`--preset fast` on the command line is PRESETS["fast"]; a flag given beside it wins."""
+    """`--preset fast` on the command line is PRESETS["fast"], its step budget included; a flag given beside it
+    wins."""
     from chopperscape.learn import train
 
     out = tmp_path / "run"
@@ -47,9 +49,9 @@ def test_the_preset_is_the_command_lines(tmp_path):
     from chopperscape.learn.recipe import PRESETS
 
     for key, value in PRESETS["fast"].items():
-        if key not in ("num_envs", "num_steps"):
+        if key not in ("num_envs", "num_steps", "total_steps"):
             assert saved[key] == value, key
-    assert (saved["num_envs"], saved["num_steps"]) == (8, 16)
+    assert (saved["num_envs"], saved["num_steps"], saved["total_steps"]) == (8, 16, 256)
 
 
 def test_the_phase_benchmark_runs_and_accounts_for_every_phase():

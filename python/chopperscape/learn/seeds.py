@@ -45,6 +45,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -53,7 +54,7 @@ import numpy as np
 
 from .. import _atomic
 from .._checks import regular_file
-from .._cli import print_line
+from .._cli import RULE_OPTIONS, print_line
 from . import progress
 
 #: Held-out evaluation: 100 episodes from seed 1,000,000 (training seeds are small numbers).
@@ -173,10 +174,14 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
         "--force",
         *forward,
     ]
+    started = time.monotonic()
     _run(f"training seed {seed}", cmd, run / "train.log")
+    wall = time.monotonic() - started
     result = _evaluate(
         str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option, run / "train.log"
     )
+    # The training's wall time (how long a seed takes, on whatever else shared the machine: see --jobs).
+    result["train_wall_s"] = round(wall, 1)
     result["runner"] = key
     _atomic.write_text(done, json.dumps(result, allow_nan=False))
     (run / ".eval-raw.json").unlink(missing_ok=True)
@@ -184,14 +189,16 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
 
 
 def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
+    """The built-in policy `name` on the held-out seeds, under the rules the seeds train on (`a.rules`: a preset's
+    frame skip, say), so that the comparison is like for like."""
     path = a.out / f"baseline-{name}.json"
-    key = {"episodes": a.eval_episodes, "seed": a.eval_seed, "option": a.option}
+    key = {"episodes": a.eval_episodes, "seed": a.eval_seed, "option": a.rules}
     if os.path.lexists(path):
         prev = read_eval(path, f"{path} (a cached baseline: remove it to evaluate {name} again)")
         if prev.get("runner") == key:
             return prev
     result = _evaluate(
-        name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.option, a.out / f"baseline-{name}.log"
+        name, a.out / f".baseline-{name}.raw", a.eval_episodes, a.eval_seed, a.rules, a.out / f"baseline-{name}.log"
     )
     result["runner"] = key
     _atomic.write_text(path, json.dumps(result, allow_nan=False))
@@ -250,6 +257,9 @@ def read_eval(path: Path, what: str | None = None) -> dict[str, Any]:
     for k in ("std_return", "mean_steps"):
         if doc[k] < 0:
             raise bad(k, ">= 0")
+    wall = doc.get("train_wall_s", 0)  # optional: the seed runner's own record of a training's wall time
+    if isinstance(wall, bool) or not isinstance(wall, (int, float)) or not 0 <= wall <= MAX_NUMBER:
+        raise bad("train_wall_s", f"a number of seconds in 0..{MAX_NUMBER:g}")
     for k, low in (("episodes", 1), ("seed", 0)):
         v = doc[k]
         if isinstance(v, bool) or not isinstance(v, int) or not low <= v < 2**63:
@@ -297,7 +307,16 @@ def summarise(results: dict[int, dict[str, Any]], baselines: dict[str, dict[str,
         "per_seed": {
             str(s): {
                 k: results[s][k]
-                for k in ("mean_return", "std_return", "min_return", "max_return", "mean_steps", "causes")
+                for k in (
+                    "mean_return",
+                    "std_return",
+                    "min_return",
+                    "max_return",
+                    "mean_steps",
+                    "causes",
+                    "train_wall_s",
+                )
+                if k in results[s]
             }
             for s in sorted(results)
         },
@@ -310,17 +329,18 @@ def markdown(summary: dict[str, Any]) -> str:
         f"Held-out evaluation: {summary['eval']['episodes']} episodes from seed {summary['eval']['seed']}, greedy; "
         f"{summary['steps']:,} env steps per training seed.",
         "",
-        "| training seed | mean ± std | min | max | ended by bird / fuel / limit |",
-        "|---|---|---|---|---|",
+        "| training seed | mean ± std | min | max | ended by bird / fuel / limit | training wall time |",
+        "|---|---|---|---|---|---|",
     ]
     for s, r in summary["per_seed"].items():
         c = r["causes"]
+        wall = f"{r['train_wall_s']:,.0f} s" if "train_wall_s" in r else "–"
         lines.append(
             f"| {s} | {r['mean_return']:,.0f} ± {r['std_return']:,.0f} | {r['min_return']:,} | {r['max_return']:,} | "
-            f"{c.get('bird', 0):.0%} / {c.get('fuel', 0):.0%} / {c.get('truncated', 0):.0%} |"
+            f"{c.get('bird', 0):.0%} / {c.get('fuel', 0):.0%} / {c.get('truncated', 0):.0%} | {wall} |"
         )
     for name, b in summary["baselines"].items():
-        lines.append(f"| *{name} policy* | {b['mean_return']:,.0f} ± {b['std_return']:,.0f} | | | |")
+        lines.append(f"| *{name} policy* | {b['mean_return']:,.0f} ± {b['std_return']:,.0f} | | | | |")
     lo, hi = summary["iqm_ci95"]
     n = len(summary["per_seed"])
     lines += [
@@ -405,13 +425,15 @@ def main(argv: list[str] | None = None) -> int:
         help="train nothing: summarise DIR/seed-K.eval.json and DIR/seed-K.csv of another trainer (into DIR)",
     )
     p.add_argument("--title", default="PPO recipe", help="what trained the seeds, for the plot's title")
-    p.add_argument("--steps", type=int, default=DEFAULT_STEPS, help=f"env steps per seed (default {DEFAULT_STEPS:,})")
+    p.add_argument(
+        "--steps", type=int, default=None, help=f"env steps per seed (default the preset's, else {DEFAULT_STEPS:,})"
+    )
     p.add_argument("--jobs", type=int, default=None, help="trainings at once (default: one per core)")
     p.add_argument("--eval-episodes", type=int, default=EVAL_EPISODES)
     p.add_argument("--eval-seed", type=int, default=EVAL_SEED)
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="env option, passed on")
     a, forward = p.parse_known_args(argv)
-    if not 1 <= a.steps <= MAX_TOTAL_STEPS:
+    if a.steps is not None and not 1 <= a.steps <= MAX_TOTAL_STEPS:
         p.error(f"--steps {a.steps}: allowed an integer in 1..={MAX_TOTAL_STEPS}")
     if not 1 <= a.eval_episodes <= MAX_EPISODES:
         p.error(f"--eval-episodes {a.eval_episodes}: allowed an integer in 1..={MAX_EPISODES}")
@@ -422,6 +444,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.summarise is not None:
         if a.seeds or a.out or forward:
             p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
+        a.steps = DEFAULT_STEPS if a.steps is None else a.steps
         return summarise_folder(a)
     if a.seeds is None or a.out is None:
         p.error("--seeds and --out are required (or --summarise DIR)")
@@ -440,8 +463,13 @@ def main(argv: list[str] | None = None) -> int:
     # Every training flag checked here, as `train` will (exit 2 naming it), before any seed is trained.
     from . import train
 
-    first = ["--out", str(a.out / f"seed-{seeds[0]}"), "--seed", str(seeds[0]), "--steps", str(a.steps)]
+    first = ["--out", str(a.out / f"seed-{seeds[0]}"), "--seed", str(seeds[0])]
+    if a.steps is not None:
+        first += ["--steps", str(a.steps)]
     _, recipe = train.parse([*first, "--force", *forward])
+    a.steps = recipe.total_steps  # the preset's budget unless --steps
+    # The baselines play the rules the seeds train on (a preset's frame skip included), as `evaluate` plays a model.
+    a.rules = [f"{k}={json.dumps(v)}" for k, v in recipe.env_options.items() if k in RULE_OPTIONS]
     if recipe.teacher:
         try:
             train.load_teacher(recipe)
@@ -523,7 +551,7 @@ def summarise_folder(a: argparse.Namespace) -> int:
                 raise ValueError(f"no training curve for every seed: {curve} missing")
             _curve(curve)
             curves[s] = curve
-        a.out, a.option = folder, []
+        a.out, a.option, a.rules = folder, [], []
         for name in ("random", "heuristic"):
             if os.path.lexists(folder / f"baseline-{name}.json"):
                 read_eval(folder / f"baseline-{name}.json")
