@@ -9,8 +9,10 @@ logging), and prints per phase the wall time per env step and its share, beside 
 with no Python in between (the env stepping the whole batch natively; one forward of the network over a whole
 rollout at once; each minibatch's forward + backward + Adam run back to back, times the epochs). The gap between a
 phase and its floor is what the loop's Python costs. On a shared machine, compare cases from one run only.
-``--smoke`` runs each case for a few updates of a tiny batch (seconds: the test command runs it so that it cannot
-rot; its figures mean nothing).
+``--sb3`` adds, for each case with an MLP, Stable-Baselines3's PPO with the same network, batch, epochs and
+minibatches through the native adapter (`chopperscape.integrations.sb3`, `VecNormalize`), trained for the same steps
+in the same run: the anchor a user would pick instead. ``--smoke`` runs each case for a few updates of a tiny batch
+(seconds: the test command runs it so that it cannot rot; its figures mean nothing).
 """
 
 from __future__ import annotations
@@ -85,12 +87,49 @@ def floors(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
     return {"env": env, "obs_norm": obs_norm, "forward": forward, "update": update}
 
 
+def sb3_steps_per_second(recipe: Recipe, steps: int) -> float:
+    """Env steps per second of wall time of SB3's PPO with `recipe`'s network, batch and epochs (an MLP recipe)."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    venv = ChopperScapeVecEnv(recipe.num_envs, seed=0, obs_type=recipe.obs_type, **recipe.env_options)
+    env = VecNormalize(venv, gamma=recipe.gamma)
+    h = recipe.hidden
+    model = PPO(
+        "MlpPolicy",
+        env,
+        learning_rate=recipe.learning_rate,
+        n_steps=recipe.num_steps,
+        batch_size=recipe.num_envs * recipe.num_steps // recipe.num_minibatches,
+        n_epochs=recipe.update_epochs,
+        gamma=recipe.gamma,
+        gae_lambda=recipe.gae_lambda,
+        clip_range=recipe.clip_coef,
+        ent_coef=recipe.ent_coef,
+        vf_coef=recipe.vf_coef,
+        max_grad_norm=recipe.max_grad_norm,
+        policy_kwargs={"net_arch": {"pi": [h, h], "vf": [h, h]}, "activation_fn": torch.nn.Tanh},
+        device=recipe.device,
+        seed=0,
+        verbose=0,
+    )
+    wall = time.perf_counter()
+    model.learn(steps)
+    wall = time.perf_counter() - wall
+    done = int(model.num_timesteps)
+    env.close()
+    return done / wall
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=131_072, help="env steps per case (default 131072)")
     p.add_argument("--case", action="append", choices=CASES, help="cases to run (default all)")
     p.add_argument("--device", default="cpu", help="cpu or cuda")
     p.add_argument("--smoke", action="store_true", help="a few tiny updates per case (seconds; for the tests)")
+    p.add_argument("--sb3", action="store_true", help="SB3's PPO with the same network and batch, as an anchor")
     a = p.parse_args(argv)
     steps = 256 if a.smoke else a.steps
     print(
@@ -115,6 +154,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name:<12} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}")
         other = wall - sum(phases.seconds.values())
         print(f"{'(setup)':<12} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}")
+        if a.sb3 and network_of(recipe) == "mlp":
+            sb3 = sb3_steps_per_second(recipe, steps)
+            print(f"SB3 PPO, the same network, batch and epochs: {sb3:,.0f} env steps/s ({done / wall / sb3:.1f}x)")
     return 0
 
 

@@ -55,10 +55,11 @@ def test_the_preset_is_the_command_lines(tmp_path):
 
 
 def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
+    pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not installed (the SB3 anchor)")
     from chopperscape.learn.phases import PHASES
 
     out = subprocess.run(
-        [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "fast"],
+        [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "fast", "--sb3"],
         capture_output=True,
         text=True,
         timeout=300,
@@ -70,3 +71,4 @@ def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
         (row,) = [line for line in lines if line.startswith(phase + " ")]
         assert float(row.split()[1]) >= 0, row
     assert any(line.startswith("## fast:") for line in lines)
+    assert any(line.startswith("SB3 PPO, the same network") for line in lines), out.stdout
