@@ -161,6 +161,26 @@ fn run_err(e: impl std::fmt::Display) -> PolicyError {
     PolicyError::Run(one_line(&format!("{e:#}")))
 }
 
+/// What a path that is not a regular file is, in words ("a folder", "a character device", ...).
+#[cfg(unix)]
+fn file_kind(kind: std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt as _;
+    match () {
+        () if kind.is_dir() => "a folder",
+        () if kind.is_char_device() => "a character device",
+        () if kind.is_block_device() => "a block device",
+        () if kind.is_fifo() => "a named pipe",
+        () if kind.is_socket() => "a socket",
+        () => "not a regular file",
+    }
+}
+
+/// What a path that is not a regular file is, in words.
+#[cfg(not(unix))]
+fn file_kind(kind: std::fs::FileType) -> &'static str {
+    if kind.is_dir() { "a folder" } else { "not a regular file" }
+}
+
 impl Policy {
     /// Reads a policy file ([`MAX_POLICY_BYTES`] at most).
     ///
@@ -170,6 +190,14 @@ impl Policy {
         use std::io::Read;
         let path = path.as_ref();
         let read_err = |source| PolicyError::Read { path: path.display().to_string(), source };
+        // Only a regular file is a policy: a device (`/dev/zero`) would read as an endless or empty file, a FIFO
+        // would block the open, a folder fails later with a vaguer message. Said before anything is read.
+        let kind = std::fs::metadata(path).map_err(read_err)?.file_type();
+        if !kind.is_file() {
+            let what = file_kind(kind);
+            let source = std::io::Error::other(format!("it is {what}, not a policy file (an exported .onnx)"));
+            return Err(read_err(source));
+        }
         let file = std::fs::File::open(path).map_err(read_err)?;
         let mut bytes = Vec::new();
         // One byte past the limit tells a file at the limit from a larger one, without reading the rest.

@@ -116,3 +116,26 @@ fn damaged_and_foreign_files_are_errors_not_panics() {
     let big = vec![0u8; MAX_POLICY_BYTES as usize + 1];
     assert!(matches!(Policy::from_bytes(&big), Err(PolicyError::TooLarge { .. })));
 }
+
+/// Only a regular file is read as a policy: a device, a folder or a named pipe is named as what it is, at once (a
+/// FIFO with no writer would block the open; `/dev/zero` used to be "0 bytes, more than 64 MiB").
+#[cfg(unix)]
+#[test]
+fn a_device_a_folder_or_a_pipe_is_named_as_what_it_is() {
+    let dir = std::env::temp_dir().join(format!("chopperscape-policy-kinds-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fifo = dir.join("pipe.onnx");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success());
+    let mut cases = vec![("/dev/zero".into(), "a character device"), (dir.clone(), "a folder")];
+    if made {
+        cases.push((fifo, "a named pipe"));
+    }
+    for (path, kind) in cases {
+        let started = std::time::Instant::now();
+        let err = Policy::load(&path).unwrap_err().to_string();
+        assert!(err.contains(&path.display().to_string()) && err.contains(kind), "{}: {err}", path.display());
+        assert!(!err.contains("more than"), "{err}");
+        assert!(started.elapsed() < std::time::Duration::from_secs(5), "{}", path.display());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
