@@ -92,28 +92,12 @@ def sb3_steps_per_second(recipe: Recipe, steps: int) -> float:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings
 
     venv = ChopperScapeVecEnv(recipe.num_envs, seed=0, obs_type=recipe.obs_type, **recipe.env_options)
     env = VecNormalize(venv, gamma=recipe.gamma)
-    h = recipe.hidden
     model = PPO(
-        "MlpPolicy",
-        env,
-        learning_rate=recipe.learning_rate,
-        n_steps=recipe.num_steps,
-        batch_size=recipe.num_envs * recipe.num_steps // recipe.num_minibatches,
-        n_epochs=recipe.update_epochs,
-        gamma=recipe.gamma,
-        gae_lambda=recipe.gae_lambda,
-        clip_range=recipe.clip_coef,
-        ent_coef=recipe.ent_coef,
-        vf_coef=recipe.vf_coef,
-        max_grad_norm=recipe.max_grad_norm,
-        policy_kwargs={"net_arch": {"pi": [h, h], "vf": [h, h]}, "activation_fn": torch.nn.Tanh},
-        device=recipe.device,
-        seed=0,
-        verbose=0,
+        "MlpPolicy", env, learning_rate=recipe.learning_rate, **ppo_settings(recipe), device=recipe.device, seed=0
     )
     wall = time.perf_counter()
     model.learn(steps)

@@ -26,7 +26,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
+from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings, save_normalization
 from chopperscape.learn import progress
 from chopperscape.learn.recipe import Recipe
 
@@ -91,16 +91,7 @@ def main() -> None:
             "MlpPolicy",
             env,
             learning_rate=lambda remaining: lr * max(remaining, 0.05),
-            n_steps=r.num_steps,
-            batch_size=r.num_envs * r.num_steps // r.num_minibatches,
-            n_epochs=r.update_epochs,
-            gamma=r.gamma,
-            gae_lambda=r.gae_lambda,
-            clip_range=r.clip_coef,
-            ent_coef=r.ent_coef,
-            vf_coef=r.vf_coef,
-            max_grad_norm=r.max_grad_norm,
-            policy_kwargs={"net_arch": [r.hidden, r.hidden]},
+            **ppo_settings(r),
             seed=a.seed,
             device="cpu",
         )

@@ -21,7 +21,6 @@ seeds.
 
 from __future__ import annotations
 
-import hashlib
 import importlib
 import importlib.util
 import inspect
@@ -34,7 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import __version__
+from .. import __version__, _atomic
 from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
 from . import protocol, results
@@ -43,14 +42,6 @@ from . import protocol, results
 OBS_OPTIONS = ("obs_type", "obs_size", "frame_stack", "hud", "hud_style", "keep_dim")
 
 Act = Callable[[np.ndarray, VectorEnv], np.ndarray]
-
-
-def sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 class Builtin:
@@ -108,7 +99,7 @@ def load(
         raise ValueError(
             f"policy {policy!r} is not a file, a built-in policy ({', '.join(NAMES)}) or an import path pkg.mod:func"
         )
-    info["sha256"] = sha256(path)
+    info["sha256"] = _atomic.sha256(path)
     info["actions"] = actions
     if path.suffix == ".onnx":
         return _onnx(path, options, rules, stochastic, run, info)
@@ -184,7 +175,7 @@ def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:
     if not callable(func):
         raise ValueError(f"policy {spec!r} is not callable")
     source = inspect.getsourcefile(module)
-    info.update(kind="callable", actions="as-is", sha256=sha256(Path(source)) if source else None)
+    info.update(kind="callable", actions="as-is", sha256=_atomic.sha256(Path(source)) if source else None)
 
     def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
         return np.asarray(func(batch))

@@ -58,6 +58,25 @@ from .._checks import check_reset_options, core_seed
 from ..vector import VectorEnv
 
 
+def ppo_settings(recipe: Any) -> dict[str, Any]:
+    """SB3 `PPO`'s keyword arguments for a recipe (:class:`chopperscape.learn.recipe.Recipe`): its rollout, batch,
+    epochs, γ, GAE λ, clip, coefficients, gradient clip and network ([hidden, hidden] for the actor and the critic,
+    SB3's MlpPolicy tanh), all but the learning rate, whose schedule is the caller's."""
+    r = recipe
+    return {
+        "n_steps": r.num_steps,
+        "batch_size": r.num_envs * r.num_steps // r.num_minibatches,
+        "n_epochs": r.update_epochs,
+        "gamma": r.gamma,
+        "gae_lambda": r.gae_lambda,
+        "clip_range": r.clip_coef,
+        "ent_coef": r.ent_coef,
+        "vf_coef": r.vf_coef,
+        "max_grad_norm": r.max_grad_norm,
+        "policy_kwargs": {"net_arch": [r.hidden, r.hidden]},
+    }
+
+
 class ChopperScapeVecEnv(VecEnv):
     """`num_envs` ChopperScape environments as one SB3 `VecEnv` (see the module docs).
 

@@ -35,7 +35,6 @@ full disk: nothing is left behind).
 from __future__ import annotations
 
 import argparse
-import hashlib
 import io
 import json
 import os
@@ -56,14 +55,6 @@ CHECK_OBSERVATIONS = 1000
 CHECK_TOLERANCE = 1e-5
 #: ONNX operator set of the export: within what tract is tested against (9 to 18).
 OPSET = 17
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def load(path: Path):
@@ -174,7 +165,7 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         "obs_shape": json.dumps(list(env_shape)),
         "env_options": json.dumps(options, sort_keys=True),
         **{k: str(v) for k, v in versions.items()},
-        "source_sha256": _sha256(model),
+        "source_sha256": _atomic.sha256(model),
     }
     # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
     # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
