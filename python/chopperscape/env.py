@@ -69,7 +69,13 @@ class ChopperScapeEnv(gym.Env):
     `obs_size=(H, W)` (default `(600, 800)`) draws pixel observations at that size; `frame_stack=k` stacks the
     last `k` observations on the last axis (`(46·k,)` for features).
 
-    **The HUD in pixel observations** (pixel layout version 2, `chopperscape.PIXELS_VERSION`), in the
+    **The agent view** (pixel layout version 3, `chopperscape.PIXELS_VERSION`). Frames smaller than 300 × 400
+    (84 × 84, 42 × 42) draw each entity as a solid box in its kind's grey level, at least 3 × 3 pixels, so that a
+    small CNN sees every bird and tank: bird 0, alien 32, missile 64, chopper 112, fuel tank 176 on the white
+    (255) sky (`look="auto"`). `look="art"` draws the tutorial's sprites at every size (version 2),
+    `look="agent"` the boxes at every size; `render()` always shows the art.
+
+    **The HUD in pixel observations**, in the
     `⌊H / 10⌋` rows above the flight band. Frames at least 300 × 400 show the tutorial's text line
     `Fuel Left: N | Rewards: N | Lives: N`. Smaller frames, where that text is illegible, show two bars a network
     can read instead (`hud_style="auto"`): at 84 × 84 the fuel bar fills rows 1–3 and the lives bar rows 5–6,
@@ -77,7 +83,7 @@ class ChopperScapeEnv(gym.Env):
     `I = round(255 · 84 · v / m)` units of ink from the left: black pixels, one grey pixel of level
     `255 − (I mod 255)`, then white. Decode one row with `I = sum(255 − row)` and `v = I · m / (255 · 84)`:
     fuel to within 0.003 % of `max_fuel`, lives exactly. The same grey levels appear in rgb (`(g, g, g)`) and
-    grayscale. `hud_style="text"` draws the text at every size (version 1), `"gauge"` the bars at every size
+    grayscale. `hud_style="text"` draws the text at every size (version 1 with `look="art"`), `"gauge"` the bars at every size
     (`render()` included); `hud=False` draws no HUD. Other sizes and the exact layout: `docs/SPEC.md`.
 
     ## Rewards

@@ -69,7 +69,7 @@ def test_collected_dataset_loads_with_minari_and_equals_a_replay(options):
     meta = back.storage.metadata
     assert meta["policy"] == "heuristic" and meta["seeds"] == [7, 8, 9]
     assert meta["chopperscape_version"] == datasets._core.__version__
-    assert (meta["features_version"], meta["pixels_version"]) == (2, 2)
+    assert (meta["features_version"], meta["pixels_version"]) == (2, 3)
     assert meta["max_episode_steps"] == 250 and meta["jpeg_encoding"] is False
     assert back.spec.env_spec.kwargs["obs_type"] == options["obs_type"]
     # Minari rebuilds the env from the stored spec.

@@ -83,7 +83,7 @@ def test_the_committed_export_is_of_the_committed_model(model, exported, obs_typ
         shape,
         options,
     )
-    assert (meta["features_version"], meta["pixels_version"]) == ("2", "2")
+    assert (meta["features_version"], meta["pixels_version"]) == ("2", "3")
 
 
 @needs_torch

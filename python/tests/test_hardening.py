@@ -21,8 +21,8 @@ from conftest import SHORT
 import chopperscape
 from chopperscape import ChopperScapeEnv, VectorEnv, _core
 
-# Payload offsets of snapshot format version 2 (crates/core/src/snapshot.rs).
-OBS_TYPE, OBS_H, OBS_W, FRAME_STACK, RETURN, STEPS, HEADER = 0, 1, 5, 9, 109, 121, 10
+# Payload offsets of snapshot format version 3 (crates/core/src/snapshot.rs).
+OBS_TYPE, OBS_H, OBS_W, FRAME_STACK, RETURN, STEPS, HEADER = 0, 1, 5, 9, 110, 122, 10
 
 
 def tamper(state: bytes, **fields: bytes) -> bytes:

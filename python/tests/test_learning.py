@@ -154,11 +154,15 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
 
     payload = torch.load(out / "model.pt", weights_only=True)
     assert payload["obs_shape"] == [42, 42, 4] and payload["pixels_version"] == chopperscape.PIXELS_VERSION
-    # A model of another pixel layout is refused, naming both versions.
-    with pytest.raises(
-        ValueError, match=f"pixel layout v1, and this chopperscape draws v{chopperscape.PIXELS_VERSION}"
-    ):
-        model.agent_from_checkpoint({**payload, "pixels_version": 1})
+    # A model of a later pixel layout is refused, naming both versions; one of an older layout is shown that
+    # layout (version 2: the art; version 1: the art and the text HUD), its own options over those.
+    later = chopperscape.PIXELS_VERSION + 1
+    with pytest.raises(ValueError, match=f"pixel layout v{later}, and this chopperscape draws v{later - 1}"):
+        model.agent_from_checkpoint({**payload, "pixels_version": later})
+    assert model.from_payload({**payload, "pixels_version": 2}).recipe["env_options"]["look"] == "art"
+    old = model.from_payload({**payload, "pixels_version": 1}).recipe["env_options"]
+    assert (old["look"], old["hud_style"], old["max_fuel"]) == ("art", "text", 300)
+    assert "look" not in model.from_payload(payload).recipe["env_options"]
     agent = model.agent_from_checkpoint(payload)
     assert isinstance(agent, model.CnnAgent)
     # The frame skip, stack and size came back from the model: evaluation plays the frames it was trained on.

@@ -422,6 +422,15 @@ options! {
         flag: ("hud-style", "auto|text|gauge"),
         page: false,
     },
+    look: Look {
+        default: "auto",
+        allowed: choice("one of \"auto\", \"art\", \"agent\""),
+        doc: "How drawn frames show the entities (auto: the tutorial's art in frames of at least 300x400, the agent \
+              view in smaller ones: solid boxes of at least 3x3 pixels, one grey level per kind)",
+        role: observation,
+        flag: none,
+        page: false,
+    },
     lives: u32 {
         default: "1",
         allowed: int(1, 1000),
@@ -611,6 +620,37 @@ impl HudStyle {
 
 choice!(HudStyle, "hud_style");
 
+/// How the entities are drawn into a frame: the tutorial's pixel art, or the agent view that a small CNN reads
+/// (solid boxes, one grey level per kind, at least [`crate::render::AGENT_MIN_SIDE`] pixels a side). See
+/// [`crate::render`] for the agent view and [`crate::render::PIXELS_VERSION`] for its history.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Look {
+    /// The art where sprites keep their shape (frames at least half the full size in each direction,
+    /// [`crate::render::TEXT_MIN_SIZE`]), the agent view in smaller frames.
+    #[default]
+    Auto,
+    /// The tutorial's pixel art at every size (pixel layout version 2).
+    Art,
+    /// The agent view at every size.
+    Agent,
+}
+
+impl Look {
+    /// Every look, in SPEC order.
+    pub const ALL: [Look; 3] = [Look::Auto, Look::Art, Look::Agent];
+
+    /// The name used in SPEC.md and Python: `"auto"`, `"art"`, `"agent"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Look::Auto => "auto",
+            Look::Art => "art",
+            Look::Agent => "agent",
+        }
+    }
+}
+
+choice!(Look, "look");
+
 fn out_of_range(option: &'static str, value: impl ToString, allowed: &'static str) -> ConfigError {
     ConfigError::OutOfRange { option, value: value.to_string(), allowed }
 }
@@ -686,7 +726,7 @@ mod tests {
     fn options_are_the_option_names_in_order() {
         let names: Vec<&str> = OPTIONS.iter().map(|o| o.name).collect();
         assert_eq!(names, OPTION_NAMES);
-        assert_eq!(OPTION_NAMES.len(), 14);
+        assert_eq!(OPTION_NAMES.len(), 15);
         assert_eq!(option_info("lives").map(|o| o.allowed), Some("an integer in 1..=1000"));
         assert_eq!(option_info("gravity"), None);
     }
@@ -723,6 +763,7 @@ mod tests {
                 ("frame_stack", "an integer in 1..=64"),
                 ("hud", "true or false"),
                 ("hud_style", "one of \"auto\", \"text\", \"gauge\""),
+                ("look", "one of \"auto\", \"art\", \"agent\""),
                 ("lives", "an integer in 1..=1000"),
                 ("bird_fuel_collision", "\"pass\" or \"destroy\""),
                 ("alien_prob", "a probability in [0, 1]"),
@@ -777,7 +818,7 @@ mod tests {
     #[test]
     fn rules_are_the_options_an_action_log_records() {
         let observation: Vec<&str> = OPTIONS.iter().filter(|o| !o.rule).map(|o| o.name).collect();
-        assert_eq!(observation, ["obs_type", "obs_size", "frame_stack", "hud", "hud_style"]);
+        assert_eq!(observation, ["obs_type", "obs_size", "frame_stack", "hud", "hud_style", "look"]);
     }
 
     #[test]

@@ -56,8 +56,8 @@ mod world;
 
 pub use action::{ACTION_MEANINGS, Action, N_ACTIONS};
 pub use config::{
-    BirdFuelCollision, CliFlag, Config, HudStyle, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, OptionKind, OptionValue,
-    option_info,
+    BirdFuelCollision, CliFlag, Config, HudStyle, Look, OPTION_NAMES, OPTIONS, ObsType, OptionInfo, OptionKind,
+    OptionValue, option_info,
 };
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};

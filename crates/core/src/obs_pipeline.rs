@@ -72,10 +72,10 @@ impl Observer {
             ObsType::Grayscale => h * w,
         };
         let canvas = try_filled(canvas_len, 255, "the observation canvas")?;
-        let renderer = config
-            .obs_type
-            .is_pixels()
-            .then(|| Renderer::with_format(config.obs_size.0, config.obs_size.1, Hud::of_observation(config), format));
+        let renderer = config.obs_type.is_pixels().then(|| {
+            let (h, w) = config.obs_size;
+            Renderer::with_look(h, w, Hud::of_observation(config), config.look, format)
+        });
         let space = match config.obs_type {
             ObsType::Features => BoxSpace::repeated(
                 vec![FEATURES_LEN * k],

@@ -4,7 +4,7 @@
 //! `frame_stack > 1`, the stacked observation, so a restored environment continues exactly as the original
 //! would: same observations, rewards, flags and infos.
 //!
-//! # Byte format (version 2, little-endian)
+//! # Byte format (version 3, little-endian)
 //! `"CSNP"`, `u16` version, `u32` payload length, payload, `u32` CRC-32 of the payload. The payload is: the
 //! options (every [`Config`] field, in declaration order), the generator state (`4 × u64`), the last applied action (`u8`), the world
 //! (chopper, fuel, return, lives, steps, status, then each entity list as a `u32` count and its boxes), and the
@@ -16,13 +16,16 @@
 //! snapshot is always a state the game could be in.
 //!
 //! # Versions
+//! - 3: `look` (`u8`: 0 auto, 1 art, 2 agent) follows `hud_style`.
+//! - 2: no `look`. Still read, as `look = "art"`: such a snapshot was taken when every frame showed the art, so
+//!   it decodes to exactly those frames (its frame stack included), as version 1 does for the HUD below.
 //! - 2: `hud_style` (`u8`: 0 auto, 1 text, 2 gauge) follows `hud`.
 //! - 1: no `hud_style`. Still read: such a snapshot was taken when every frame carried the text HUD, so it
 //!   decodes with `hud_style = "text"`, which draws exactly those frames (its frame stack included); restoring
 //!   it into an environment of another `hud_style` is refused naming the option, like any other option.
 
 use crate::action::Action;
-use crate::config::{BirdFuelCollision, Config, HudStyle, ObsType};
+use crate::config::{BirdFuelCollision, Config, HudStyle, Look, ObsType};
 use crate::consts::{ALIEN_SIZE, BIRD_SIZE, CHOPPER_SIZE, FUEL_TANK_SIZE, MISSILE_SIZE};
 use crate::env::ChopperScape;
 use crate::error::{Error, SnapshotError};
@@ -35,7 +38,7 @@ use crate::rules::Game;
 use crate::world::{Alien, Cause, Status, World};
 
 /// The snapshot byte format's version, the one written. Versions 1 to this one are read; others are refused.
-pub const SNAPSHOT_VERSION: u16 = 2;
+pub const SNAPSHOT_VERSION: u16 = 3;
 /// The oldest version still read.
 const OLDEST_VERSION: u16 = 1;
 const MAGIC: &[u8; 4] = b"CSNP";
@@ -68,6 +71,7 @@ impl Snapshot {
         p.u32(c.frame_stack);
         p.u8(c.hud as u8);
         p.u8(c.hud_style as u8);
+        p.u8(c.look as u8);
         p.u32(c.lives);
         p.u8(c.bird_fuel_collision as u8);
         p.f64(c.alien_prob);
@@ -201,6 +205,8 @@ fn decode_payload(r: &mut Reader<'_>, version: u16) -> Result<Snapshot, Snapshot
     } else {
         HudStyle::Text
     };
+    let look =
+        if version >= 3 { *Look::ALL.get(r.u8("look")? as usize).ok_or_else(|| bad("look"))? } else { Look::Art };
     let lives = r.u32("lives")?;
     let bird_fuel_collision = match r.u8("bird_fuel_collision")? {
         0 => BirdFuelCollision::Pass,
@@ -213,6 +219,7 @@ fn decode_payload(r: &mut Reader<'_>, version: u16) -> Result<Snapshot, Snapshot
         frame_stack,
         hud,
         hud_style,
+        look,
         lives,
         bird_fuel_collision,
         alien_prob: r.f64("alien_prob")?,

@@ -114,8 +114,8 @@ fn fuel_decodes_through_an_episode(options: &[(&str, &str)], bars: (Bar, Bar)) -
 }
 
 #[test]
-fn the_pixel_layout_is_version_2_and_auto_draws_text_from_half_the_full_size() {
-    assert_eq!(PIXELS_VERSION, 2);
+fn the_pixel_layout_is_version_3_and_auto_draws_text_from_half_the_full_size() {
+    assert_eq!(PIXELS_VERSION, 3);
     assert_eq!(TEXT_MIN_SIZE, (300, 400));
     let hud = |style, h, w| Hud::of(true, style, h, w);
     assert_eq!(hud(HudStyle::Auto, 600, 800), Hud::Text);

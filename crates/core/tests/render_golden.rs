@@ -1,7 +1,9 @@
 //! Golden frames: seeded states drawn and compared byte for byte with the PNG files in `tests/golden/`.
 //!
-//! The 84 × 84 frames are the env's own observations (drawn incrementally through `step`); `gray_84x84_text`
-//! is pixel layout version 1 (`hud_style = "text"`), the others version 2 (`render::PIXELS_VERSION`).
+//! The small frames are the env's own observations (drawn incrementally through `step`). `gray_84x84`,
+//! `rgb_84x84` and `gray_42x42` are pixel layout version 3 (`render::PIXELS_VERSION`: the agent view);
+//! `gray_84x84_art` is version 2 (`look = "art"`) and `gray_84x84_text` version 1 (`look = "art"`,
+//! `hud_style = "text"`): the older layouts stay selectable, and their frames stay what they were.
 //!
 //! Regenerate them (after a deliberate change to the art, the HUD or the scaling; review the images like code):
 //!
@@ -137,6 +139,19 @@ fn grayscale_84x84_observation_with_the_gauges_matches_its_golden_frame() {
 }
 
 #[test]
+fn grayscale_42x42_agent_view_matches_its_golden_frame() {
+    let (_, obs) = busy_env(&[("obs_type", "grayscale"), ("obs_size", "42x42")]);
+    check("gray_42x42", observation_frame(obs));
+}
+
+#[test]
+fn grayscale_84x84_with_the_art_matches_the_version_2_golden_frame() {
+    // `look = "art"` draws pixel layout version 2: this file is the 84 × 84 golden frame of version 2.
+    let (_, obs) = busy_env(&[("obs_type", "grayscale"), ("obs_size", "84x84"), ("look", "art")]);
+    check("gray_84x84_art", observation_frame(obs));
+}
+
+#[test]
 fn rgb_84x84_observation_with_the_gauges_matches_its_golden_frame() {
     let (_, obs) = busy_env(&[("obs_size", "84x84")]);
     check("rgb_84x84", observation_frame(obs));
@@ -145,7 +160,8 @@ fn rgb_84x84_observation_with_the_gauges_matches_its_golden_frame() {
 #[test]
 fn grayscale_84x84_with_the_text_hud_matches_the_version_1_golden_frame() {
     // `hud_style = "text"` draws pixel layout version 1: this file is the 84 × 84 golden frame of version 1.
-    let (_, obs) = busy_env(&[("obs_type", "grayscale"), ("obs_size", "84x84"), ("hud_style", "text")]);
+    let options = [("obs_type", "grayscale"), ("obs_size", "84x84"), ("hud_style", "text"), ("look", "art")];
+    let (_, obs) = busy_env(&options);
     check("gray_84x84_text", observation_frame(obs));
 }
 
@@ -157,6 +173,6 @@ fn full_size_render_with_the_gauges_matches_its_golden_frame() {
 
 #[test]
 fn odd_size_without_hud_matches_its_golden_frame() {
-    let (_, obs) = busy_env(&[("obs_size", "97x131"), ("hud", "false")]);
+    let (_, obs) = busy_env(&[("obs_size", "97x131"), ("hud", "false"), ("look", "art")]);
     check("rgb_97x131_no_hud", observation_frame(obs));
 }

@@ -34,8 +34,8 @@ fn incremental_equals_full(options: &[(&str, &str)], steps: usize) {
     let k = config.frame_stack as usize;
     let scale = HudScale::of(&config);
     let mut env = ChopperScape::new(config.clone()).unwrap();
-    let mut incremental = Renderer::with_format(h, w, Hud::of_observation(&config), format);
-    let mut full = Renderer::with_format(h, w, Hud::of_observation(&config), format);
+    let mut incremental = Renderer::with_look(h, w, Hud::of_observation(&config), config.look, format);
+    let mut full = Renderer::with_look(h, w, Hud::of_observation(&config), config.look, format);
     let mut frame = vec![0u8; incremental.frame_len()];
     let mut expected = vec![0u8; full.frame_len()];
     let mut actions = Actions(0x9E37_79B9_7F4A_7C15);
@@ -118,5 +118,13 @@ fn incremental_equals_full_with_each_hud_style_at_every_layout() {
         let mut o = BUSY.to_vec();
         o.extend([("obs_size", size), ("hud_style", style), ("lives", lives)]);
         incremental_equals_full(&o, if size == "600x800" { 150 } else { 1500 });
+    }
+    // Each look at agent resolution: the art (pixel layout 2) and the agent view, whose grown boxes overlap.
+    for look in ["art", "agent"] {
+        for size in ["84x84", "42x42", "16x16"] {
+            let mut o = BUSY.to_vec();
+            o.extend([("obs_size", size), ("look", look), ("obs_type", "grayscale")]);
+            incremental_equals_full(&o, 1500);
+        }
     }
 }

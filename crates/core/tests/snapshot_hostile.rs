@@ -1,22 +1,25 @@
 //! Crafted snapshots with a correct checksum: sizes are checked before anything is allocated, and every value
 //! is checked against what the rules can reach, so a decoded snapshot is always a state the game could be in.
 
-use chopperscape::{ChopperScape, Config, Env, Error, HudStyle, ObsType, SNAPSHOT_VERSION, Snapshot, SnapshotError};
+use chopperscape::{
+    ChopperScape, Config, Env, Error, HudStyle, Look, ObsType, SNAPSHOT_VERSION, Snapshot, SnapshotError,
+};
 
-/// Payload offsets of the version-2 format (see `snapshot.rs`).
+/// Payload offsets of the version-3 format (see `snapshot.rs`).
 const OBS_TYPE: usize = 0;
 const OBS_H: usize = 1;
 const OBS_W: usize = 5;
 const FRAME_STACK: usize = 9;
 const HUD_STYLE: usize = 14;
-const MAX_EPISODE_STEPS: usize = 60;
-const CHOPPER: usize = 97;
-const FUEL: usize = 105;
-const RETURN: usize = 109;
-const LIVES_LEFT: usize = 117;
-const STEPS: usize = 121;
-const STATUS: usize = 125;
-const BIRDS: usize = 126;
+const LOOK: usize = 15;
+const MAX_EPISODE_STEPS: usize = 61;
+const CHOPPER: usize = 98;
+const FUEL: usize = 106;
+const RETURN: usize = 110;
+const LIVES_LEFT: usize = 118;
+const STEPS: usize = 122;
+const STATUS: usize = 126;
+const BIRDS: usize = 127;
 const HEADER: usize = 10;
 
 /// Edits the payload of `bytes` and writes the matching checksum, as a hostile user would.
@@ -245,9 +248,27 @@ fn an_unknown_hud_style_is_refused_by_name() {
     assert!(err.contains("hud_style"), "{err}");
 }
 
-/// `bytes` (version 2) rewritten in the version-1 format: no `hud_style` byte.
+#[test]
+fn an_unknown_look_is_refused_by_name() {
+    let bytes = played(Config::features(), 10).snapshot().to_bytes();
+    assert_eq!(bytes[HEADER + LOOK], Look::Auto as u8);
+    let err = corrupted(&tamper(&bytes, |p| p[LOOK] = 3));
+    assert!(err.contains("look"), "{err}");
+}
+
+/// `bytes` (version 3) rewritten in the version-2 format: no `look` byte.
+fn as_version_2(bytes: &[u8]) -> Vec<u8> {
+    let mut v2 = tamper(bytes, |p| {
+        p.remove(LOOK);
+    });
+    v2[4..6].copy_from_slice(&2u16.to_le_bytes());
+    v2
+}
+
+/// `bytes` (version 3) rewritten in the version-1 format: no `hud_style` and no `look` byte.
 fn as_version_1(bytes: &[u8]) -> Vec<u8> {
     let mut v1 = tamper(bytes, |p| {
+        p.remove(LOOK);
         p.remove(HUD_STYLE);
     });
     v1[4..6].copy_from_slice(&1u16.to_le_bytes());
@@ -255,9 +276,41 @@ fn as_version_1(bytes: &[u8]) -> Vec<u8> {
 }
 
 #[test]
+fn version_2_snapshots_load_with_the_art_they_were_drawn_with() {
+    assert_eq!(SNAPSHOT_VERSION, 3);
+    let options = [("obs_type", "grayscale"), ("obs_size", "84x84"), ("frame_stack", "2"), ("look", "art")];
+    let mut config = Config::default();
+    for (k, v) in options {
+        config.set(k, v).unwrap();
+    }
+    let mut original = played(config.clone(), 40);
+    let snap = Snapshot::from_bytes(&as_version_2(&original.snapshot().to_bytes())).unwrap();
+    assert_eq!(snap.config(), &config);
+    let mut restored = ChopperScape::from_snapshot(&snap).unwrap();
+    for t in 0..30 {
+        let (a, b) = (original.step(t % 5).unwrap(), restored.step(t % 5).unwrap());
+        assert_eq!(a, b, "step {t}");
+        if a.terminated {
+            break;
+        }
+    }
+    // An env of the default look (the agent view at 84 × 84) refuses it by name.
+    let mut auto = ChopperScape::new(Config { look: Look::Auto, ..config }).unwrap();
+    match auto.restore(&snap) {
+        Err(Error::Snapshot(SnapshotError::ConfigMismatch(m))) => assert!(m.contains("look art != auto"), "{m}"),
+        other => panic!("expected a refusal naming look, got {other:?}"),
+    }
+}
+
+#[test]
 fn version_1_snapshots_load_with_the_text_hud_they_were_drawn_with() {
-    assert_eq!(SNAPSHOT_VERSION, 2);
-    let options = [("obs_type", "grayscale"), ("obs_size", "84x84"), ("frame_stack", "3"), ("hud_style", "text")];
+    let options = [
+        ("obs_type", "grayscale"),
+        ("obs_size", "84x84"),
+        ("frame_stack", "3"),
+        ("hud_style", "text"),
+        ("look", "art"),
+    ];
     let mut config = Config::default();
     for (k, v) in options {
         config.set(k, v).unwrap();

@@ -80,15 +80,26 @@ impl Metadata {
     ///
     /// # Errors
     /// [`PolicyError::Metadata`] naming an option `Config::set` refuses.
+    /// A pixel policy that learned an older layout is shown that layout: the options that draw it
+    /// (`chopperscape::render::layout_options`) come first, the policy's own over them.
     pub fn config(&self) -> Result<Config, PolicyError> {
         let mut config = Config { obs_type: self.obs_type, ..Config::default() };
+        let layout = if self.obs_type.is_pixels() {
+            chopperscape::render::layout_options(self.pixels_version).unwrap_or_default()
+        } else {
+            &[]
+        };
+        for &(name, value) in layout {
+            config.set(name, value).map_err(|e| bad(keys::PIXELS_VERSION, format!("{e}")))?;
+        }
         for (name, value) in &self.env_options {
             config.set(name, value).map_err(|e| bad(keys::ENV_OPTIONS, format!("holds {name}={value}: {e}")))?;
         }
         Ok(config)
     }
 
-    /// Checks the layout version the policy learned against the one this core draws.
+    /// Checks the layout version the policy learned against the ones this core draws: the features layout it
+    /// computes, or a pixel layout it can still draw ([`Metadata::config`] selects it).
     ///
     /// # Errors
     /// [`PolicyError::Metadata`] naming the version that differs.
@@ -98,7 +109,8 @@ impl Metadata {
         } else {
             (keys::FEATURES_VERSION, self.features_version, chopperscape::features::FEATURES_VERSION)
         };
-        if learned != current {
+        let drawn = self.obs_type.is_pixels() && chopperscape::render::layout_options(learned).is_some();
+        if learned != current && !drawn {
             return Err(bad(
                 key,
                 format!("is {learned}: the policy learned layout v{learned}, and this chopperscape draws v{current}"),
@@ -192,5 +204,27 @@ mod tests {
         let mut p = props("{}");
         p[0].1 = "chopperscape-policy/9".into();
         assert!(read(&p).unwrap_err().to_string().contains("`format`"));
+    }
+
+    /// A pixel policy is shown the layout it learned: version 2 the art, version 1 the art and the text HUD,
+    /// this version the defaults; its own options win; a version from the future is refused by name.
+    #[test]
+    fn a_pixel_policy_sees_the_layout_it_learned() {
+        use chopperscape::{HudStyle, Look};
+        let with = |version: &str, options: &str| {
+            let mut p = props(options);
+            p[5].1 = version.into();
+            read(&p).and_then(|m| m.check_versions().map(|()| m))
+        };
+        let look = |version: &str, options: &str| {
+            let c = with(version, options).unwrap().config().unwrap();
+            (c.look, c.hud_style)
+        };
+        assert_eq!(look("3", "{}"), (Look::Auto, HudStyle::Auto));
+        assert_eq!(look("2", "{}"), (Look::Art, HudStyle::Auto));
+        assert_eq!(look("1", "{}"), (Look::Art, HudStyle::Text));
+        assert_eq!(look("2", r#"{"hud_style": "gauge"}"#), (Look::Art, HudStyle::Gauge));
+        let err = with("4", "{}").unwrap_err().to_string();
+        assert!(err.contains("`pixels_version`") && err.contains("v4") && err.contains("v3"), "{err}");
     }
 }

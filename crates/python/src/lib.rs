@@ -46,6 +46,12 @@ mod _core {
         m.add("SNAPSHOT_VERSION", chopperscape::SNAPSHOT_VERSION)?;
         m.add("FEATURES_VERSION", chopperscape::features::FEATURES_VERSION)?;
         m.add("PIXELS_VERSION", chopperscape::render::PIXELS_VERSION)?;
+        let layouts = pyo3::types::PyDict::new(m.py());
+        for version in 1..=chopperscape::render::PIXELS_VERSION {
+            let options = chopperscape::render::layout_options(version).unwrap_or_default();
+            layouts.set_item(version, pyo3::types::PyDict::from_sequence(&options.to_vec().into_pyobject(m.py())?)?)?;
+        }
+        m.add("PIXEL_LAYOUTS", layouts)?;
         m.add("RENDER_FPS", chopperscape::consts::RENDER_FPS)?;
         m.add("POLICY_NAMES", chopperscape::policy::NAMES.to_vec())?;
         m.add("MAX_ENV_BYTES", chopperscape::limits::MAX_ENV_BYTES)?;

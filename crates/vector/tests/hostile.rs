@@ -94,11 +94,11 @@ fn without_a_time_limit_a_step_count_of_u32_max_neither_truncates_nor_wraps() {
     env.reset(Some(4));
     env.step(4).unwrap();
     let bytes = env.snapshot().to_bytes();
-    // Payload offsets of format version 2: return at 109, steps at 121 (see crates/core's snapshot tests).
+    // Payload offsets of format version 3: return at 110, steps at 122 (see crates/core's snapshot tests).
     let mut payload = bytes[10..bytes.len() - 4].to_vec();
     let steps = u32::MAX - 1;
-    payload[109..117].copy_from_slice(&i64::from(steps).to_le_bytes());
-    payload[121..125].copy_from_slice(&steps.to_le_bytes());
+    payload[110..118].copy_from_slice(&i64::from(steps).to_le_bytes());
+    payload[122..126].copy_from_slice(&steps.to_le_bytes());
     let mut crafted = bytes[..10].to_vec();
     crafted.extend_from_slice(&payload);
     crafted.extend_from_slice(&crc32(&payload).to_le_bytes());

@@ -28,7 +28,7 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
     ) from err
 
-from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic, _signals
+from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic, _core, _signals
 from .._checks import regular_file
 from .._cli import ENV_OPTIONS
 from .recipe import MAX_MODEL_BYTES, RESERVED_OPTIONS, Recipe, network_of
@@ -152,6 +152,29 @@ class Frames(nn.Module):
         return x.float() * (1.0 / 255.0)
 
 
+def shift_pad(obs_shape: tuple[int, ...]) -> int:
+    """The random shift's padding for frames of `obs_shape`: 4 pixels at 84 × 84 (DrQ's), scaled, at least 1."""
+    return max(1, round(4 * min(obs_shape[:2]) / 84))
+
+
+def random_shift(x: torch.Tensor, pad: int, generator: torch.Generator | None = None) -> torch.Tensor:
+    """DrQ's random shift of a batch of frame stacks `x` (``(N, H, W)`` or ``(N, H, W, k)``, any dtype): each
+    padded by `pad` pixels that repeat its edges, then cropped back to ``H × W`` at its own random offset in
+    ``0..=2·pad`` (integer shifts, one per frame stack, the same for its `k` frames)."""
+    squeeze = x.dim() == 3
+    if squeeze:
+        x = x.unsqueeze(-1)
+    n, h, w, _ = x.shape
+    rows = torch.arange(h, device=x.device).clamp_(0, h - 1)
+    cols = torch.arange(w, device=x.device)
+    off = torch.randint(0, 2 * pad + 1, (2, n), device=x.device, generator=generator)
+    # Edge padding as clamped indices: row r of the padded frame is row clamp(r - pad) of the frame.
+    r = (rows[None, :] + off[0][:, None] - pad).clamp_(0, h - 1)
+    c = (cols[None, :] + off[1][:, None] - pad).clamp_(0, w - 1)
+    out = x[torch.arange(n, device=x.device)[:, None, None], r[:, :, None], c[:, None, :]]
+    return out.squeeze(-1) if squeeze else out
+
+
 #: CNN layouts: (channels, kernel, stride) per convolution, then the width of the dense layer. "small" on frames
 #: under 64 pixels starts with a 4×4 stride-2 convolution, so that its second one sees the same 9×9 map at 42×42
 #: as at 84×84.
@@ -251,7 +274,8 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
     pixels = recipe["obs_type"] != "features"
     learned = payload.get("pixels_version" if pixels else "features_version", 1 if pixels else 2)
     current = PIXELS_VERSION if pixels else FEATURES_VERSION
-    if learned != current:
+    # An older pixel layout is still drawn, under the options `_core.PIXEL_LAYOUTS` names (`learned_options`).
+    if learned != current and not (pixels and learned in _core.PIXEL_LAYOUTS):
         kind = "pixel" if pixels else "features"
         raise ValueError(
             f"{what}: the model learned {kind} layout v{learned}, and this chopperscape draws v{current}: retrain "
@@ -430,7 +454,18 @@ def from_payload(payload: Any, what: str = "the checkpoint") -> Model:
                 f"{what} is not a usable chopperscape.learn.train model: `obs_rms` must hold a mean and a "
                 f"variance of shape {shape}, finite numbers (variances >= 0)"
             )
-    return Model(agent, shape, norm, recipe)
+    return Model(agent, shape, norm, {**recipe, "env_options": learned_options(payload)})
+
+
+def learned_options(payload: dict[str, Any]) -> dict[str, Any]:
+    """The env options that show a checked payload's policy what it learned from: its recipe's, over the options
+    that draw the pixel layout it learned where that is an older one (a model of pixel layout 2 sees
+    `look="art"`; `_core.PIXEL_LAYOUTS`)."""
+    recipe = payload["recipe"]
+    options = dict(recipe.get("env_options", {}))
+    if recipe["obs_type"] == "features":
+        return options
+    return {**_core.PIXEL_LAYOUTS.get(payload.get("pixels_version", 1), {}), **options}
 
 
 def load(path: Path, what: str | None = None) -> Model:

@@ -17,6 +17,7 @@ they have no per-update diagnostics of their own). Readers: ``python -m choppers
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -51,6 +52,32 @@ class Writer:
         self._csv = csv.writer(self._file)
         self._csv.writerow(self.columns)
         self._file.flush()
+
+    @classmethod
+    def resume(cls, path: str | os.PathLike, env_steps: int) -> Writer:
+        """Continues the progress CSV of a run resumed at `env_steps`: its rows up to there are kept (rows written
+        after that checkpoint are dropped, since the resumed run writes them again), rewritten atomically, and the
+        file opened for appending. `ValueError` naming the file when it is not this module's CSV."""
+        from .. import _atomic
+
+        regular_file(path, str(path), MAX_BYTES)
+        try:
+            with open(path, newline="", encoding="utf-8") as f:
+                rows = list(csv.reader(f))
+        except (UnicodeDecodeError, csv.Error, OSError) as e:
+            raise ValueError(f"{path}: not a progress CSV this trainer wrote ({e})") from None
+        if not rows or tuple(rows[0]) != COLUMNS:
+            raise ValueError(f"{path}: not a progress CSV this trainer wrote (its header differs)")
+        at = COLUMNS.index("env_steps")
+        keep = [r for r in rows[1:] if len(r) == len(COLUMNS) and r[at].isdigit() and int(r[at]) <= env_steps]
+        text = io.StringIO()
+        csv.writer(text).writerows([rows[0], *keep])
+        _atomic.write_text(path, text.getvalue())
+        writer = cls.__new__(cls)
+        writer.columns = COLUMNS
+        writer._file = open(path, "a", newline="")
+        writer._csv = csv.writer(writer._file)
+        return writer
 
     def row(self, values: Mapping[str, Any]) -> None:
         """One row; a column missing from `values` is written blank, an unknown key is a `KeyError`."""

@@ -7,8 +7,9 @@ loading a network library (only :func:`check_device` imports torch, to ask it wh
 
 from __future__ import annotations
 
+import json
 import os
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +37,7 @@ RECIPE_FLAGS = (
     "network",
     "device",
     "aux_coef",
+    "augment",
     "teacher",
     "teacher_coef",
     "teacher_fade",
@@ -149,6 +151,11 @@ class Recipe:
     teacher: str = ""
     teacher_coef: float = 1.0
     teacher_fade: float = 1.0
+    #: CNN recipes only: data augmentation of the update's minibatches. "shift" is DrQ's and RAD's random shift
+    #: (Kostrikov et al. 2020, Laskin et al. 2020): each frame stack padded by repeating its edges, by 4 pixels at
+    #: 84 × 84 (scaled with the frame, at least 1), then cropped back at a random offset. "none" (the default):
+    #: none. The rollout's forward passes see the frames as they are.
+    augment: str = "none"
 
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -159,8 +166,10 @@ RESERVED_OPTIONS = {
     "autoreset_mode": "the recipe steps the batch in NEXT_STEP mode and masks the reset steps",
     "render_mode": "the recipe draws nothing",
 }
-#: The files of a run in its folder.
-RUN_FILES = ("model.pt", "progress.csv", "recipe.json")
+#: The files of a run in its folder: the model, its curve, its recipe, and the state `--resume` continues from.
+RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
+#: The augmentations `Recipe.augment` names.
+AUGMENTS = ("none", "shift")
 #: The networks `Recipe.network` names.
 NETWORKS = ("auto", "mlp", "small", "nature")
 
@@ -224,6 +233,8 @@ def check_recipe(recipe: Recipe) -> None:
         check_bool(name, getattr(r, name))
     if not isinstance(r.obs_type, str):
         raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
+    if r.augment not in AUGMENTS:
+        raise ValueError(f"invalid value {r.augment!r} for option `augment`: allowed {', '.join(map(repr, AUGMENTS))}")
     if r.network not in NETWORKS:
         raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
     check_device(r.device)
@@ -232,6 +243,11 @@ def check_recipe(recipe: Recipe) -> None:
         raise ValueError(
             f"invalid value {r.aux_coef!r} for option `aux_coef`: the auxiliary features loss is for CNN recipes "
             "(pixel observations); allowed 0 here"
+        )
+    if r.augment != "none" and mlp:
+        raise ValueError(
+            f"invalid value {r.augment!r} for option `augment`: augmentation is for CNN recipes (pixel observations); "
+            "allowed 'none' here"
         )
     if r.teacher and mlp:
         raise ValueError(
@@ -265,6 +281,28 @@ def check_run_folder(out: Path, force: bool = False) -> None:
             f"--out {out} already holds a run ({', '.join(there)}): pass --force to start over in it (its files are "
             "replaced), or give another folder"
         )
+
+
+def read_recipe(path: Path) -> Recipe:
+    """The recipe a run's `recipe.json` holds, every setting checked (`ValueError` naming the file and what is
+    wrong: not a file, not JSON, an unknown setting, a value out of range)."""
+    from .._checks import regular_file
+
+    regular_file(path, str(path), 1 << 20)
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ValueError(f"{path}: not a recipe ({e})") from None
+    names = {f.name for f in fields(Recipe)}
+    if not isinstance(data, dict) or set(data) - names:
+        unknown = sorted(set(data) - names) if isinstance(data, dict) else []
+        raise ValueError(f"{path}: not a recipe of this trainer (unknown settings {unknown})")
+    try:
+        recipe = Recipe(**data)
+    except TypeError as e:
+        raise ValueError(f"{path}: not a recipe of this trainer ({e})") from None
+    check_recipe(recipe)
+    return recipe
 
 
 def network_of(recipe: dict[str, Any] | Recipe) -> str:

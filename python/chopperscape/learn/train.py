@@ -47,11 +47,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _atomic, _core, _signals
-from .._cli import ENV_OPTIONS, RULE_OPTIONS, env_options, print_line
+from .. import _atomic, _signals
+from .._cli import ENV_OPTIONS, env_options, print_line
 from ..vector import VectorEnv
 from . import progress
-from .model import CnnAgent, Model, ObsNormalizer, RunningMeanStd, build_agent, load, save
+from .guidance import Guidance, env_state, load_teacher, set_env_state
+from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, random_shift, save, shift_pad
 from .phases import OFF, Phases
 from .recipe import (
     DEFAULT_STEPS,
@@ -66,6 +67,7 @@ from .recipe import (
     check_recipe,
     check_run_folder,
     network_of,
+    read_recipe,
 )
 
 try:
@@ -78,41 +80,6 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
 
 #: Columns of the progress CSV (the schema and its meaning: :mod:`chopperscape.learn.progress`).
 CSV_COLUMNS = list(progress.COLUMNS)
-
-
-def _rules(options: dict) -> dict:
-    """The rules options among env `options`, as comparable values (numbers as floats), those equal to their default
-    left out: `{}`, `{"frame_skip": 1}` and `{"alien_prob": 0.0}` are the same rules."""
-
-    def value(v: object) -> object:
-        try:
-            return float(v) if not isinstance(v, bool) else str(v).lower()  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            return str(v).lower()
-
-    defaults = {o["name"]: value(o["default"]) for o in _core.OPTIONS}
-    return {k: value(v) for k, v in options.items() if k in RULE_OPTIONS and value(v) != defaults[k]}
-
-
-def load_teacher(recipe: Recipe) -> Model:
-    """The features model `recipe.teacher` names, checked to guide this recipe: a features MLP trained on the same
-    rules (frame skip included). `ValueError` in one line otherwise; the file is read as data
-    (`torch.load(weights_only=True)`), never run."""
-    if not os.path.lexists(recipe.teacher):
-        raise ValueError(f"teacher {recipe.teacher!r}: no such file (give a features model.pt from this trainer)")
-    teacher = load(Path(recipe.teacher), f"teacher {recipe.teacher!r}")
-    if teacher.recipe["obs_type"] != "features" or len(teacher.obs_shape) != 1:
-        raise ValueError(
-            f"teacher {recipe.teacher!r} learned {teacher.recipe['obs_type']!r} observations: a teacher must be a "
-            "features model (--obs-type features)"
-        )
-    mine, theirs = _rules(recipe.env_options), _rules(teacher.recipe.get("env_options", {}))
-    if mine != theirs:
-        raise ValueError(
-            f"teacher {recipe.teacher!r} learned other rules ({theirs or 'the defaults'}) than this run's "
-            f"({mine or 'the defaults'}): train the teacher with the same rules options, frame_skip included"
-        )
-    return teacher
 
 
 class RunWriteError(OSError):
@@ -179,16 +146,48 @@ def start_run(out: Path, recipe: Recipe) -> tuple[progress.Writer, Path | None]:
         raise
 
 
-def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool = False, phases: Phases = OFF) -> Path:
+def _read_resume(out: Path) -> dict:
+    """The state `OUT/resume.pt` holds (tensors and plain data, read with `weights_only=True`); `ValueError` naming
+    the file when it is missing or not one this trainer wrote."""
+    from .model import read_checkpoint
+
+    path = out / "resume.pt"
+    what = f"resume state {str(path)!r}"
+    if not os.path.lexists(path):
+        raise ValueError(f"--resume {out}: no resume.pt there (a run saves one at each checkpoint, every 50 updates)")
+    state = read_checkpoint(path, what)
+    if not isinstance(state, dict) or state.get("format") != RESUME_FORMAT:
+        raise ValueError(f"{what} is not a resume state of this trainer (format {RESUME_FORMAT})")
+    return state
+
+
+#: The format of `OUT/resume.pt`.
+RESUME_FORMAT = "chopperscape-ppo-resume/1"
+#: Updates between checkpoints (`model.pt` and `resume.pt`).
+CHECKPOINT_EVERY = 50
+
+
+def train(
+    recipe: Recipe,
+    out: Path,
+    minutes: float | None = None,
+    force: bool = False,
+    phases: Phases = OFF,
+    resume: bool = False,
+) -> Path:
     """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
     model path. `phases` (a :class:`~chopperscape.learn.phases.Phases`) collects where the wall time went.
-    `ValueError` for a setting out of range or a folder that holds a run (unless `force`), before anything is
-    written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
+    With `resume`, continues the run in `out` from its last checkpoint (`resume.pt`): the curve goes on as the
+    uninterrupted run's would (the envs, the statistics, the optimiser and both random streams are restored).
+    `ValueError` for a setting out of range or a folder that holds a run (unless `force` or `resume`), before
+    anything is written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
     out = Path(out)
     check_recipe(recipe)
     check_minutes(minutes)
-    check_run_folder(out, force)
+    saved = _read_resume(out) if resume else None
+    if not resume:
+        check_run_folder(out, force)
     teacher = load_teacher(recipe) if recipe.teacher else None
     torch.manual_seed(recipe.seed)
     torch.set_num_threads(recipe.torch_threads)
@@ -209,45 +208,21 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             f"{MAX_PARAMETERS:,}: smaller observations (obs_size), fewer stacked frames or a smaller network"
         )
     agent = build_agent(network, obs_shape, 5, recipe.hidden, recipe.invert_frames).to(device)
-    # --- Guidance from the game's features (pixel recipes: `aux_coef > 0`, `teacher`) ---------------------------
-    # A twin env with `features` observations, reset with the same seeds and stepped with the same actions, is in
-    # the same state at every step (determinism). A linear head on the CNN's trunk learns to predict its
-    # standardised features (`aux_coef`); a features teacher reads it and the policy is pulled toward the
-    # teacher's action probabilities (`teacher`). Only training sees either; the saved model is a pixel model.
-    twin, aux_head, feat_norm = None, None, None
-    params = list(agent.parameters())
-    cnn = agent if isinstance(agent, CnnAgent) else None
-    feat_dim = 0
+    pixels = network != "mlp"
+    # Training-only guidance from the features (a separate part: plain PPO has none; see guidance.py).
+    guide: Guidance | None = None
     if recipe.aux_coef > 0 or teacher is not None:
-        if cnn is None:
-            raise ValueError("the auxiliary loss and the teacher are for CNN recipes (pixel observations) only")
-        twin_options = {k: v for k, v in recipe.env_options.items() if k in RULE_OPTIONS}
-        if teacher is not None:  # the teacher's own observation settings (a frame-stacked teacher, say)
-            seen = teacher.recipe.get("env_options", {}).items()
-            twin_options.update({k: v for k, v in seen if k not in RULE_OPTIONS and k != "obs_type"})
-        twin = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type="features", **twin_options)
-        feat_dim = int((twin.single_observation_space.shape or (0,))[0])
-        if teacher is not None and tuple(teacher.obs_shape) != (feat_dim,):
+        if not isinstance(agent, CnnAgent):
             envs.close()
-            twin.close()
-            raise ValueError(
-                f"teacher {recipe.teacher!r} takes observations of shape {teacher.obs_shape}, but its env options "
-                f"give ({feat_dim},): it is not a model this trainer wrote"
-            )
-    if recipe.aux_coef > 0 and cnn is not None:
-        feat_norm = ObsNormalizer((feat_dim,), True)
-        with torch.random.fork_rng(devices=[]):  # the head's init leaves the run's random stream as it was
-            torch.manual_seed(recipe.seed + 1)
-            aux_head = nn.Linear(cnn.embedding_width, feat_dim).to(device)
-        params += list(aux_head.parameters())
-    if teacher is not None:
-        teacher.agent.to(device)
+            raise ValueError("the auxiliary loss and the teacher are for CNN recipes (pixel observations) only")
+        guide = Guidance(recipe, agent, teacher, recipe.num_steps, device)
+    params = list(agent.parameters()) + (guide.params if guide else [])
     optimizer = torch.optim.Adam(params, lr=recipe.learning_rate, eps=1e-5)
     # Vector observations are standardised with running statistics; frames are scaled by the network itself.
-    pixels = network != "mlp"
     obs_norm = ObsNormalizer(obs_shape, recipe.norm_obs and not pixels)
     ret_rms = RunningMeanStd(())
     disc_return = np.zeros(recipe.num_envs)
+    pad = shift_pad(obs_shape) if recipe.augment == "shift" else 0
 
     def encode(raw: np.ndarray) -> torch.Tensor:
         """A batch of observations as the network takes them (frames stay uint8: a quarter of the memory)."""
@@ -255,13 +230,14 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
 
     # --- Rollout storage -------------------------------------------------------------------------------------
     n, t_len = recipe.num_envs, recipe.num_steps
+    feat_dim = guide.feat_dim if guide else 0
     # Each stored step: its observation (twice: the buffer and the update's batch), the twin's features, the
     # teacher's log-probabilities and seven numbers.
     per_step = 2 * math.prod(obs_shape) * (1 if pixels else 4) + 4 * (2 * feat_dim + 5 + 7)
     if n * t_len * per_step > MAX_ROLLOUT_BYTES:
         envs.close()
-        if twin is not None:
-            twin.close()
+        if guide is not None:
+            guide.close()
         raise ValueError(
             f"invalid values {n} and {t_len} for options `num_envs` and `num_steps`: an update's rollout would take "
             f"{n * t_len * per_step / 2**30:.1f} GiB, more than {MAX_ROLLOUT_BYTES >> 30} GiB: fewer envs or steps"
@@ -271,38 +247,81 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
     buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
     # With NEXT_STEP autoreset, the step after an episode's end is the reset step: no transition to learn from.
     buf_valid = torch.zeros((t_len, n), device=device)
-    buf_feat = torch.zeros((t_len, n, feat_dim) if aux_head is not None else (0,), device=device)
-    # The teacher's log-probabilities of the five actions in each stored state.
-    buf_teach = torch.zeros((t_len, n, 5) if teacher is not None else (0,), device=device)
 
-    def guidance(feat_raw: np.ndarray) -> tuple[torch.Tensor, torch.Tensor]:
-        """The twin's features as the auxiliary head's target (standardised by running statistics) and the
-        teacher's log-probabilities on them (its own frozen statistics)."""
-        target = torch.from_numpy(feat_norm(feat_raw, update=True)).to(device) if feat_norm else torch.zeros(0)
-        if teacher is None:
-            return target, torch.zeros(0)
-        with torch.no_grad():
-            logits = teacher.agent.actor(torch.from_numpy(teacher.norm(feat_raw)).to(device))
-        return target, torch.log_softmax(logits, -1)
-
-    raw, _ = envs.reset(seed=recipe.seed)
-    next_obs = encode(raw)
-    if twin is not None:
-        feat_raw, _ = twin.reset(seed=recipe.seed)
-        next_feat, next_teach = guidance(feat_raw)
+    # --- The run's state: what a checkpoint saves and `--resume` restores -------------------------------------
     next_done = np.zeros(n, bool)  # the previous step ended an episode: this step is a reset step
     ep_return, ep_len = np.zeros(n), np.zeros(n, np.int64)
     finished: deque[tuple[float, int]] = deque(maxlen=100)
-    episodes = 0
-    env_steps = 0
+    episodes = env_steps = update = 0
+    wall_before = 0.0  # wall seconds of the run before this process (a resumed run's curve keeps counting)
+    if saved is None:
+        raw, _ = envs.reset(seed=recipe.seed)
+        next_obs = encode(raw)
+        if guide is not None:
+            guide.reset(recipe.seed)
+    else:
+        try:
+            agent.load_state_dict(saved["agent"])
+            optimizer.load_state_dict(saved["optimizer"])
+            set_env_state(envs, saved["envs"])
+            if guide is not None:
+                guide.load_state(saved["guidance"])
+            obs_norm.rms = RunningMeanStd.from_state(saved["obs_rms"])
+            ret_rms = RunningMeanStd.from_state(saved["ret_rms"])
+            next_obs = saved["next_obs"].to(device)
+            next_done = saved["next_done"].numpy().astype(bool)
+            disc_return, ep_return = saved["disc_return"].numpy().copy(), saved["ep_return"].numpy().copy()
+            ep_len = saved["ep_len"].numpy().astype(np.int64)
+            finished.extend((float(r), int(k)) for r, k in saved["finished"])
+            episodes, env_steps, update = int(saved["episodes"]), int(saved["env_steps"]), int(saved["update"])
+            wall_before = float(saved["wall_s"])
+            rng.bit_generator.state = json.loads(saved["numpy_rng"])
+            torch.set_rng_state(saved["torch_rng"])
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as e:
+            envs.close()
+            if guide is not None:
+                guide.close()
+            raise ValueError(f"--resume {out}: resume.pt does not fit this run's recipe ({e})") from None
+
+    def checkpoint_state() -> dict:
+        return {
+            "format": RESUME_FORMAT,
+            "agent": agent.state_dict(),
+            "optimizer": optimizer.state_dict(),
+            "envs": env_state(envs),
+            "guidance": guide.state() if guide is not None else None,
+            "obs_rms": obs_norm.rms.state(),
+            "ret_rms": ret_rms.state(),
+            "next_obs": next_obs.cpu(),
+            "next_done": torch.from_numpy(next_done.copy()),
+            "disc_return": torch.from_numpy(disc_return.copy()),
+            "ep_return": torch.from_numpy(ep_return.copy()),
+            "ep_len": torch.from_numpy(ep_len.copy()),
+            "finished": [[r, k] for r, k in finished],
+            "episodes": episodes,
+            "env_steps": env_steps,
+            "update": update,
+            "wall_s": wall_before + time.monotonic() - start,
+            "numpy_rng": json.dumps(rng.bit_generator.state),
+            "torch_rng": torch.get_rng_state(),
+        }
+
+    def save_resume(state: dict) -> None:
+        path = out / "resume.pt"
+        with _writing(path, kept), _signals.deferred(f"the resume state is saved in {path}"):
+            with _atomic.replacing(path) as tmp:
+                torch.save(state, tmp)
+
     start = time.monotonic()
     model_path = out / "model.pt"
     csv_path = out / "progress.csv"
-    writer, aside = start_run(out, recipe)
+    if resume:
+        writer, aside = progress.Writer.resume(csv_path, env_steps), None
+    else:
+        writer, aside = start_run(out, recipe)
     if aside is not None:
         print(f"note: --force: the run that was in {out} is kept in {aside}", file=sys.stderr)
     kept = "; the model saved last is kept"
-    update = 0
     stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
     phases.start()
     try:
@@ -327,18 +346,13 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 buf_obs[t], buf_act[t], buf_logp[t], buf_val[t] = next_obs, action, logp, value
                 buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
                 actions = action.cpu().numpy()
+                if guide is not None:
+                    guide.store(t)
                 phases.lap("bookkeeping")
                 raw, reward, term, trunc, info = envs.step(actions)
                 phases.lap("env")
-                if twin is not None:
-                    if aux_head is not None:
-                        buf_feat[t] = next_feat
-                    if teacher is not None:
-                        buf_teach[t] = next_teach
-                    feat_raw, reward2, term2, trunc2, _ = twin.step(actions)
-                    if not all(map(np.array_equal, (reward, term, trunc), (reward2, term2, trunc2))):
-                        raise RuntimeError("the features twin env left the pixel env's game (rewards or ends differ)")
-                    next_feat, next_teach = guidance(feat_raw)
+                if guide is not None:
+                    guide.step(actions, reward, term, trunc)
                 env_steps += int(valid.sum())
                 done = term | trunc
                 # Episode statistics, on real (not reset) steps.
@@ -384,29 +398,21 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             b_act, b_logp = buf_act.reshape(-1)[mask], buf_logp.reshape(-1)[mask]
             b_adv, b_ret = adv.reshape(-1)[mask], returns.reshape(-1)[mask]
             b_val = buf_val.reshape(-1)[mask]
-            b_feat = buf_feat.reshape(-1, feat_dim)[mask] if aux_head is not None else None
-            b_teach = buf_teach.reshape(-1, 5)[mask] if teacher is not None else None
+            if guide is not None:
+                guide.flatten(mask)
             size = b_obs.shape[0]
             phases.lap("gae")
-            # The teacher's weight falls linearly to 0 at teacher_fade × total_steps (env steps, as every schedule).
-            teach_w = recipe.teacher_coef * max(1.0 - env_steps / (recipe.teacher_fade * recipe.total_steps), 0.0)
 
             # --- Optimisation ------------------------------------------------------------------------------------
             # entropy, approx_kl, clip_frac, value_loss, policy_loss, minibatches, aux_loss, teacher_kl
             stats = np.zeros(8)
-            zero = torch.zeros((), device=device)
             for _ in range(recipe.update_epochs):
                 # Even minibatches (no tiny remainder, whose advantage std would be undefined).
                 for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
-                    logits, value, h = agent.heads(b_obs[idx])
+                    mb_obs = random_shift(b_obs[idx], pad) if pad else b_obs[idx]
+                    logits, value, h = agent.heads(mb_obs)
                     dist = torch.distributions.Categorical(logits=logits)
                     logp, entropy = dist.log_prob(b_act[idx]), dist.entropy()
-                    aux_loss, teacher_kl = zero, zero
-                    if aux_head is not None and b_feat is not None and h is not None:
-                        aux_loss = ((aux_head(h) - b_feat[idx]) ** 2).mean()
-                    if b_teach is not None:
-                        t_logp = b_teach[idx]
-                        teacher_kl = (t_logp.exp() * (t_logp - dist.logits)).sum(-1).mean()
                     log_ratio = logp - b_logp[idx]
                     ratio = log_ratio.exp()
                     a = b_adv[idx]
@@ -414,9 +420,11 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                     pg = torch.max(-a * ratio, -a * ratio.clamp(1 - recipe.clip_coef, 1 + recipe.clip_coef)).mean()
                     v_loss = 0.5 * ((value - b_ret[idx]) ** 2).mean()
                     ent = entropy.mean()
-                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss + recipe.aux_coef * aux_loss
-                    if teach_w > 0:
-                        loss = loss + teach_w * teacher_kl
+                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss
+                    aux_loss = teacher_kl = 0.0
+                    if guide is not None:
+                        extra, aux_loss, teacher_kl = guide.loss(idx, logits, h, env_steps)
+                        loss = loss + extra
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {update}")
                     optimizer.zero_grad()
@@ -427,8 +435,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                         # Schulman's low-variance KL estimator, as CleanRL logs it.
                         kl = ((ratio - 1) - log_ratio).mean()
                         clipped = ((ratio - 1).abs() > recipe.clip_coef).float().mean()
-                    stats[:6] += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1]
-                    stats[6:] += [aux_loss.item(), teacher_kl.item()]
+                    stats += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1, aux_loss, teacher_kl]
             update += 1
             phases.lap("update")
             var_ret = b_ret.var().item()
@@ -442,7 +449,7 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
             m = stats / max(stats[5], 1)
             row = {
                 "env_steps": env_steps,
-                "wall_s": f"{time.monotonic() - start:.1f}",
+                "wall_s": f"{wall_before + time.monotonic() - start:.1f}",
                 "episodes": episodes,
                 "learning_rate": f"{lr:.6g}",
                 "entropy": f"{m[0]:.4f}",
@@ -459,26 +466,29 @@ def train(recipe: Recipe, out: Path, minutes: float | None = None, force: bool =
                 )
             if ended:
                 row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
-            if aux_head is not None:
+            if guide is not None and guide.aux_head is not None:
                 row["aux_loss"] = f"{m[6]:.5f}"
-            if teacher is not None:
+            if guide is not None and guide.teacher is not None:
                 row["teacher_kl"] = f"{m[7]:.5f}"
             with _writing(csv_path, kept):
                 writer.row(row)
-            if update % 50 == 0:
+            if update % CHECKPOINT_EVERY == 0:
                 with _writing(model_path, kept):
                     save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+                save_resume(checkpoint_state())
             phases.lap("logging")
             phases.steps = env_steps
+        # The end, a signal or --minutes: the model and the state to go on from, both as they are now.
+        with _writing(model_path, kept):
+            save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
+        save_resume(checkpoint_state())
     finally:
         with contextlib.suppress(OSError):
             writer.close()
         envs.close()
-        if twin is not None:
-            twin.close()
+        if guide is not None:
+            guide.close()
         stop.restore()
-    with _writing(model_path, kept):
-        save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
     stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
     return model_path
 
@@ -490,8 +500,17 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     p.add_argument(
         "--out",
         type=Path,
-        required=True,
-        help="folder for progress.csv, model.pt, recipe.json (with --seeds: one sub-folder per seed)",
+        default=None,
+        help="folder for progress.csv, model.pt, recipe.json, resume.pt (with --seeds: one sub-folder per seed)",
+    )
+    p.add_argument(
+        "--resume",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="continue the run in DIR from its last checkpoint (resume.pt, saved every 50 updates and when a run "
+        "stops), with the recipe of its recipe.json: the curve goes on as the uninterrupted run's; only --minutes "
+        "may be given with it",
     )
     p.add_argument(
         "--steps",
@@ -522,7 +541,7 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     p.add_argument(
         "--preset",
         choices=sorted(PRESETS),
-        default="features",
+        default=None,
         help="recipe preset: features (the default), fast (features at frame skip 4, learning in minutes), pixels "
         "(grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it",
     )
@@ -547,6 +566,29 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         help="start over in an --out folder that already holds a run (that run is first moved into OUT/replaced-N)",
     )
     a = p.parse_args(args)
+    if a.resume is not None:
+        flags = [f"--{f.replace('_', '-')}" for f in RECIPE_FLAGS if getattr(a, f) is not None]
+        others = {"--steps": a.steps, "--preset": a.preset, "--seeds": a.seeds, "--option": a.option or None}
+        flags += [k for k, v in others.items() if v is not None]
+        flags += [
+            k
+            for k in ("--no-norm-obs", "--no-norm-reward", "--no-invert-frames", "--force")
+            if getattr(a, k[2:].replace("-", "_"))
+        ]
+        if a.out is not None and a.out != a.resume:
+            flags.append("--out")
+        if flags:
+            p.error(f"--resume continues the run with its own recipe.json: {', '.join(flags)} cannot be given with it")
+        a.out = a.resume
+        try:
+            recipe = read_recipe(a.resume / "recipe.json")
+            check_minutes(a.minutes)
+        except ValueError as e:
+            p.error(f"--resume {a.resume}: {e}")
+        return a, recipe
+    if a.out is None:
+        p.error("the following arguments are required: --out (or --resume DIR)")
+    a.preset = a.preset or "features"
     preset = dict(PRESETS[a.preset])
     steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
     preset.pop("total_steps", None)
@@ -580,7 +622,7 @@ def main(argv: list[str] | None = None) -> int:
         return seeds.main(args)
     a, recipe = parse(args)
     try:
-        path = train(recipe, a.out, a.minutes, force=a.force)
+        path = train(recipe, a.out, a.minutes, force=a.force, resume=a.resume is not None)
     except ValueError as e:  # an env option the env refuses
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -22,8 +22,20 @@
 //! legible and the gauges elsewhere. The full-size frame of `render()` shows the text unless the style is
 //! `gauge`.
 //!
+//! # The agent view
+//! At 84 × 84 the art's sprites shrink to a few box-filtered pixels that blend into the sky (a bird is 3 × 4
+//! pixels of mid grey), and at 42 × 42 to two or three. The agent view (`look = "agent"`, and `"auto"` in frames
+//! smaller than [`TEXT_MIN_SIZE`]) draws each entity instead as a solid box of its hitbox's size, at least
+//! [`AGENT_MIN_SIDE`] pixels a side (grown about its centre), in one grey level per kind ([`AGENT_GREYS`]): the
+//! bird black, the alien, missile and chopper in darker to lighter greys, the fuel tank lightest, every one at
+//! least 79 levels darker than the white sky and drawn without blending into it. Drawing order, the HUD and
+//! incremental drawing are the art's.
+//!
+//! # Versions
 //! What a pixel observation shows under the default options is versioned, like the features layout
 //! ([`crate::features::FEATURES_VERSION`]), by [`PIXELS_VERSION`]:
+//! - 3: frames smaller than [`TEXT_MIN_SIZE`] show the agent view (`look = "auto"`); frames at least that large
+//!   are unchanged. `look = "art"` draws version 2.
 //! - 2: frames smaller than [`TEXT_MIN_SIZE`] carry the fuel and lives gauges instead of the text line
 //!   (`hud_style = "auto"`); frames at least that large are unchanged. `hud_style = "text"` draws version 1.
 //! - 1: the text line `Fuel Left: N | Rewards: N | Lives: N` at every size, sampled at pixel centres (at
@@ -48,13 +60,25 @@ use gauge::{GaugeInk, GaugeLayout};
 use hud::{HudLayout, HudText};
 use sprite::ScaledSprite;
 
-use crate::config::{Config, HudStyle};
+use crate::config::{Config, HudStyle, Look};
 use crate::consts::{HEIGHT, WIDTH};
 use crate::geometry::Rect;
 use crate::world::World;
 
 /// The version of what pixel observations show (see the module docs for the history).
-pub const PIXELS_VERSION: u32 = 2;
+pub const PIXELS_VERSION: u32 = 3;
+
+/// The options under which this renderer draws the frames of pixel layout `version`, for a policy that learned
+/// an older layout: the policy's own options are set over them. `None` for a version it cannot draw (a later
+/// one, or none that existed).
+pub fn layout_options(version: u32) -> Option<&'static [(&'static str, &'static str)]> {
+    match version {
+        3 => Some(&[]),
+        2 => Some(&[("look", "art")]),
+        1 => Some(&[("look", "art"), ("hud_style", "text")]),
+        _ => None,
+    }
+}
 
 /// The smallest frame `(height, width)` in which `hud_style = "auto"` draws the text line: half the full size,
 /// where every bit of the font still covers a pixel.
@@ -93,6 +117,28 @@ impl Hud {
         Hud::of(true, config.hud_style, HEIGHT as u32, WIDTH as u32)
     }
 }
+
+impl Look {
+    /// What `self` draws in a `height × width` frame: [`Look::Art`] or [`Look::Agent`], never `Auto`.
+    pub fn at(self, height: u32, width: u32) -> Look {
+        match self {
+            Look::Auto if height >= TEXT_MIN_SIZE.0 && width >= TEXT_MIN_SIZE.1 => Look::Art,
+            Look::Auto => Look::Agent,
+            other => other,
+        }
+    }
+
+    /// The look of `config`'s pixel observations (at `obs_size`).
+    pub fn of_observation(config: &Config) -> Look {
+        config.look.at(config.obs_size.0, config.obs_size.1)
+    }
+}
+
+/// The agent view's smallest side of an entity's box, in frame pixels.
+pub const AGENT_MIN_SIDE: usize = 3;
+
+/// The agent view's grey level of each kind, in drawing order: fuel tank, bird, alien, missile, chopper.
+pub const AGENT_GREYS: [u8; 5] = [176, 0, 32, 64, 112];
 
 /// The values the HUD shows as full: the `max_fuel` and `lives` options.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -143,6 +189,9 @@ pub struct Renderer {
     hud: HudLayer,
     /// Sprites at this scale, indexed by [`Kind`].
     sprites: [ScaledSprite; 5],
+    /// How far each kind's sprite starts left of and above its entity's scaled corner (the agent view grows
+    /// small boxes about their centre), indexed by [`Kind`].
+    shift: [(usize, usize); 5],
     /// Boxes of the sprites drawn last, to erase next time.
     drawn: Vec<PixRect>,
     /// The HUD drawn last.
@@ -169,14 +218,27 @@ impl Renderer {
     ///
     /// A [`PixelFormat::Gray`] frame equals, pixel for pixel, the [`crate::luma`] of the RGB frame.
     pub fn with_format(height: u32, width: u32, hud: Hud, format: PixelFormat) -> Renderer {
+        Renderer::with_look(height, width, hud, Look::Art, format)
+    }
+
+    /// A renderer of frames of `height × width` pixels in `format`, with this HUD, drawing the entities in
+    /// `look` (resolved for this size by [`Look::at`]).
+    pub fn with_look(height: u32, width: u32, hud: Hud, look: Look, format: PixelFormat) -> Renderer {
         let (h, w) = (height as usize, width as usize);
         let size = |len: usize, frame: usize, full: usize| ((2 * len * frame + full) / (2 * full)).max(1);
-        let scaled = |a: &art::Art| {
-            let sw = size(a.width(), w, WIDTH as usize);
-            let sh = size(a.height(), h, HEIGHT as usize);
-            ScaledSprite::new(a, sw, sh, format)
-        };
-        let sprites = [art::FUEL_TANK, art::BIRD, art::ALIEN, art::MISSILE, art::CHOPPER].map(|a| scaled(&a));
+        let arts = [art::FUEL_TANK, art::BIRD, art::ALIEN, art::MISSILE, art::CHOPPER];
+        let mut shift = [(0, 0); 5];
+        let sprites: [ScaledSprite; 5] = std::array::from_fn(|k| {
+            let (sw, sh) = (size(arts[k].width(), w, WIDTH as usize), size(arts[k].height(), h, HEIGHT as usize));
+            match look.at(height, width) {
+                Look::Agent => {
+                    let (bw, bh) = (sw.max(AGENT_MIN_SIDE).min(w), sh.max(AGENT_MIN_SIDE).min(h));
+                    shift[k] = ((bw - sw.min(bw)) / 2, (bh - sh.min(bh)) / 2);
+                    ScaledSprite::solid(bw, bh, AGENT_GREYS[k], format)
+                }
+                _ => ScaledSprite::new(&arts[k], sw, sh, format),
+            }
+        });
         let (hud, shown) = match hud {
             Hud::Off => (HudLayer::Off, HudShown::Nothing),
             Hud::Text => (HudLayer::Text(HudLayout::new(h, w)), HudShown::Text(HudText::EMPTY)),
@@ -191,7 +253,7 @@ impl Renderer {
             };
             bottom <= crate::consts::Y_MIN as usize * h / HEIGHT as usize
         });
-        Renderer { height: h, width: w, format, hud, sprites, drawn: Vec::with_capacity(64), shown }
+        Renderer { height: h, width: w, format, hud, sprites, shift, drawn: Vec::with_capacity(64), shown }
     }
 
     /// Frame height in pixels.
@@ -256,7 +318,7 @@ impl Renderer {
         let mut drawn = std::mem::take(&mut self.drawn);
         drawn.clear();
         for_each_sprite(world, |kind, r| {
-            let (x, y) = self.place(r);
+            let (x, y) = self.place(kind, r);
             drawn.push(self.sprites[kind as usize].blit(&mut canvas, x, y));
         });
         self.drawn = drawn;
@@ -285,7 +347,7 @@ impl Renderer {
         let mut canvas = self.canvas(frame);
         canvas.bytes.fill(canvas::BACKGROUND);
         for_each_sprite(world, |kind, r| {
-            let (x, y) = self.place(r);
+            let (x, y) = self.place(kind, r);
             on_sprite(self.sprites[kind as usize].blit(&mut canvas, x, y));
         });
         match &self.hud {
@@ -308,12 +370,15 @@ impl Renderer {
         Canvas { width: self.width, height: self.height, bpp: self.format.bytes_per_pixel(), bytes: frame }
     }
 
-    /// The frame pixel of an entity's top-left corner.
+    /// The frame pixel of the top-left corner of a `kind` entity's sprite.
     #[inline]
-    fn place(&self, r: &Rect) -> (usize, usize) {
+    fn place(&self, kind: Kind, r: &Rect) -> (usize, usize) {
         let x = r.x.max(0) as usize * self.width / WIDTH as usize;
         let y = r.y.max(0) as usize * self.height / HEIGHT as usize;
-        (x, y)
+        let (sx, sy) = self.shift[kind as usize];
+        // Grown boxes stay in the flight band: the rows above it are the HUD's alone.
+        let top = crate::consts::Y_MIN as usize * self.height / HEIGHT as usize;
+        (x.saturating_sub(sx), y.saturating_sub(sy).max(top.min(y)))
     }
 }
 

@@ -95,6 +95,18 @@ impl ScaledSprite {
         ScaledSprite { w, h, runs, bytes }
     }
 
+    /// A solid `w × h` box of grey level `grey` (the agent view's sprites).
+    pub fn solid(w: usize, h: usize, grey: u8, format: PixelFormat) -> ScaledSprite {
+        let bpp = format.bytes_per_pixel();
+        let runs =
+            (0..h).map(|dy| Run { dy: dy as u16, dx: 0, len: w as u16, offset: (dy * w * bpp) as u32 }).collect();
+        let mut bytes = Vec::with_capacity(w * h * bpp);
+        for _ in 0..w * h {
+            format.push(&mut bytes, [grey; 3]);
+        }
+        ScaledSprite { w, h, runs, bytes }
+    }
+
     /// Draws the sprite with its top-left corner at `(x, y)`, clipped to the canvas. Returns the clipped box.
     #[inline]
     pub fn blit(&self, canvas: &mut Canvas<'_>, x: usize, y: usize) -> PixRect {
