@@ -21,7 +21,7 @@ declare -A probes=(
 )
 for name in "${!probes[@]}"; do
   # shellcheck disable=SC2086 # the probe's flags are words
-  eval python3 -m chopperscape.learn.train "${base[@]}" --out "$out/$name" ${probes[$name]} >"$out/$name.log" 2>&1 &
+  eval "${PYTHON:-python3}" -m chopperscape.learn.train "${base[@]}" --out "$out/$name" ${probes[$name]} >"$out/$name.log" 2>&1 &
 done
 wait
 for name in "${!probes[@]}"; do
