@@ -32,8 +32,9 @@ mkdir -p "$out"
 quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
   "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
 cp web/index.html web/main.js web/style.css "$out/"
-# The trained agent the page offers ("Watch: trained agent"), the export of models/ppo-features.pt.
+# The trained agents the page offers ("Watch: trained agent", the "Agent" menu): the exports of
+# models/ppo-features.pt and models/ppo-pixels.pt.
 mkdir -p "$out/models"
-cp models/ppo-features.onnx "$out/models/"
+cp models/ppo-features.onnx models/ppo-pixels.onnx "$out/models/"
 rm -rf web/dist
 mv "$out" web/dist

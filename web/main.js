@@ -15,8 +15,10 @@ const DIRECTIONS = {
   ArrowUp: 3, KeyW: 3,
 };
 const CAUSES = { bird: "Hit by a bird", fuel: "Out of fuel" };
-// The trained agent: `models/ppo-features.pt` exported by `python -m chopperscape.learn.export`, served beside the page.
-const AGENT_URL = "models/ppo-features.onnx";
+// The trained agents, exported by `python -m chopperscape.learn.export` and served beside the page: the features
+// MLP (`models/ppo-features.pt`) and the pixel CNN (`models/ppo-pixels.pt`, which flies on the 84 × 84 frames of
+// the layout it learned). The "Agent" menu picks one.
+const AGENT_URLS = { features: "models/ppo-features.onnx", pixels: "models/ppo-pixels.onnx" };
 
 const $ = (id) => document.getElementById(id);
 const canvas = $("screen");
@@ -42,7 +44,7 @@ let over = false;
 let paused = false;
 let heuristic = false;
 let agent = false; // the trained policy flies (its game was made with Game.with_policy)
-let agentBytes = null; // the policy file, fetched once
+const agentBytes = new Map(); // each policy file, fetched once (by URL)
 let lastCause = null;
 let held = []; // codes of held direction keys, the last pressed last: it wins
 let acc = 0;
@@ -85,7 +87,7 @@ function newGame() {
     nextSeed = readSeed();
     const names = ["mode", ...RULE_INPUTS];
     const values = names.map((name) => $(name).value);
-    next = agent ? Game.with_policy(agentBytes, names, values) : new Game(names, values);
+    next = agent ? Game.with_policy(agentBytes.get(agentUrl()), names, values) : new Game(names, values);
   } catch (e) {
     showError(e.message);
     return e.message;
@@ -142,13 +144,19 @@ function setHeuristic(on) {
   updateStatus();
 }
 
-// Fetches the trained policy (once). Returns the error message, or null.
+// The URL of the policy the "Agent" menu picks.
+function agentUrl() {
+  return AGENT_URLS[$("agent-model").value] ?? AGENT_URLS.features;
+}
+
+// Fetches the chosen trained policy (once). Returns the error message, or null.
 async function loadAgent() {
-  if (agentBytes) return null;
+  const url = agentUrl();
+  if (agentBytes.has(url)) return null;
   try {
-    const response = await fetch(AGENT_URL);
-    if (!response.ok) throw new Error(`${AGENT_URL}: ${response.status} ${response.statusText || "error"}`);
-    agentBytes = new Uint8Array(await response.arrayBuffer());
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`${url}: ${response.status} ${response.statusText || "error"}`);
+    agentBytes.set(url, new Uint8Array(await response.arrayBuffer()));
     return null;
   } catch (e) {
     return `${e.message}`;
@@ -179,7 +187,7 @@ async function setAgent(on) {
   const error = newGame();
   if (error) {
     setAgentOff();
-    agentBytes = null; // a bad file is fetched again next time
+    agentBytes.delete(agentUrl()); // a bad file is fetched again next time
     const message = `The trained agent could not be loaded: ${error}`;
     showError(message);
     return message;
@@ -246,6 +254,8 @@ $("mode").addEventListener("change", applyMode);
 $("pause").addEventListener("click", () => setPaused(!paused));
 $("heuristic").addEventListener("click", () => setHeuristic(!heuristic));
 $("agent").addEventListener("click", () => setAgent(!agent));
+// Another agent while one flies: it takes over a new game with the same seed and options.
+$("agent-model").addEventListener("change", () => agent && setAgent(true));
 
 function base64(bytes) {
   let text = "";

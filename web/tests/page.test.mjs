@@ -212,6 +212,28 @@ test("watch: trained agent plays the command line's episode for the same seed", 
   });
 });
 
+test("watch: the pixel agent plays the command line's episode for the same seed", async () => {
+  execFileSync("cargo", ["build", "--quiet", "-p", "chopperscape-cli"], { cwd: ROOT, stdio: "inherit" });
+  const bin = join(process.env.CARGO_TARGET_DIR ?? join(ROOT, "target"), "debug", "chopperscape");
+  const model = join(ROOT, "models", "ppo-pixels.onnx");
+  const args = ["demo", "--policy", model, "--seed", "3", "--aliens", "0.05", "--json"];
+  const native = JSON.parse(execFileSync(bin, args, { stdio: ["ignore", "pipe", "ignore"] }).toString());
+  await withPage(async (page, errors) => {
+    await page.evaluate(() => window.chopperscape.setPaused(true));
+    assert.equal(await page.evaluate(() => window.chopperscape.newGame(3, { alien_prob: 0.05 })), null);
+    await page.selectOption("#agent-model", "pixels");
+    assert.equal(await page.evaluate(() => window.chopperscape.setAgent(true)), null);
+    const s = await page.evaluate(() => window.chopperscape.playToEnd());
+    assert.equal(s.agent, true);
+    assert.deepEqual([s.steps, s.score, s.cause], [native.steps, native.return, native.cause]);
+    // Back to the features agent: a new game with the same seed, flown by the MLP.
+    await page.selectOption("#agent-model", "features");
+    assert.equal(await page.evaluate(() => window.chopperscape.setAgent(true)), null);
+    assert.equal((await state(page)).agent, true);
+    assert.deepEqual(errors, []);
+  });
+});
+
 test("a missing or bad model file says so on the page", async () => {
   await withPage(async (page) => {
     await page.evaluate(() => window.chopperscape.setPaused(true));
