@@ -168,14 +168,17 @@ def batches(n: int, size: int, generator: Any) -> list[Any]:
     return list(torch.randperm(n, generator=generator).split(size))
 
 
-def predict(net: nn.Module, x: np.ndarray, batch: int = 1024) -> np.ndarray:
+def predict(net: nn.Module, x: np.ndarray, device: str, batch: int = 1024) -> np.ndarray:
     import torch
 
     with torch.no_grad():
-        return torch.cat([net(torch.from_numpy(x[i : i + batch])) for i in range(0, len(x), batch)]).numpy()
+        out = [net(torch.from_numpy(x[i : i + batch]).to(device)).cpu() for i in range(0, len(x), batch)]
+        return torch.cat(out).numpy()
 
 
-def fit_regressor(train: Data, epochs: int, seed: int, lr: float) -> tuple[nn.Module, np.ndarray, np.ndarray]:
+def fit_regressor(
+    train: Data, epochs: int, seed: int, lr: float, device: str
+) -> tuple[nn.Module, np.ndarray, np.ndarray]:
     """The pixel recipe's trunk and a linear head fitted to the standardised features (masked where a slot is
     empty); returns the network and the standardisation (mean, std) of its targets."""
     import torch
@@ -193,7 +196,7 @@ def fit_regressor(train: Data, epochs: int, seed: int, lr: float) -> tuple[nn.Mo
     agent = cast(CnnAgent, build_agent("small", tuple(train.frames.shape[1:]), 5, invert_frames=True))
     trunk = cast(nn.Sequential, agent.actor)[0]  # the trunk the actor and the critic share
     head = nn.Linear(agent.embedding_width, FEATURES_LEN)
-    net = nn.Sequential(trunk, head)
+    net = nn.Sequential(trunk, head).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=lr)
     x = torch.from_numpy(train.frames)
     y = torch.from_numpy((train.features - mean) / std)
@@ -201,7 +204,8 @@ def fit_regressor(train: Data, epochs: int, seed: int, lr: float) -> tuple[nn.Mo
     g = torch.Generator().manual_seed(seed)
     for _ in range(epochs):
         for idx in batches(len(x), 256, g):
-            loss = ((net(x[idx]) - y[idx]) ** 2 * m[idx]).sum() / m[idx].sum()
+            xb, yb, mb = (t[idx].to(device) for t in (x, y, m))
+            loss = ((net(xb) - yb) ** 2 * mb).sum() / mb.sum()
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -249,16 +253,19 @@ def perception_rows(held: Data, pred: np.ndarray, train: Data, height: int) -> l
     return rows
 
 
-def fit_clone(net: nn.Module, x: np.ndarray, y: np.ndarray, epochs: int, seed: int, lr: float) -> nn.Module:
+def fit_clone(
+    net: nn.Module, x: np.ndarray, y: np.ndarray, epochs: int, seed: int, lr: float, device: str
+) -> nn.Module:
     """Behaviour cloning: cross-entropy of `net`'s logits against the heuristic's actions."""
     import torch
 
+    net.to(device)
     opt = torch.optim.Adam(net.parameters(), lr=lr)
     xt, yt = torch.from_numpy(x), torch.from_numpy(y)
     g = torch.Generator().manual_seed(seed)
     for _ in range(epochs):
         for idx in batches(len(xt), 256, g):
-            loss = torch.nn.functional.cross_entropy(net(xt[idx]), yt[idx])
+            loss = torch.nn.functional.cross_entropy(net(xt[idx].to(device)), yt[idx].to(device))
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -283,7 +290,8 @@ def clone_rows(
     base = float((held.labels == majority).mean())
     torch.manual_seed(args.seed)
     frames_agent = build_agent("small", tuple(train.frames.shape[1:]), 5, invert_frames=True)
-    frames_net = fit_clone(frames_agent.actor, train.frames, train.labels, args.epochs, args.seed, args.lr).eval()
+    frames_net = fit_clone(frames_agent.actor, train.frames, train.labels, args.epochs, args.seed, args.lr, args.device)
+    frames_net.eval()
     # The features MLP reads standardised inputs, clipped to ±10, as the recipe's normaliser gives them.
     mean = train.features.mean(0)
     std = np.sqrt(train.features.var(0) + 1e-8)
@@ -294,7 +302,7 @@ def clone_rows(
     torch.manual_seed(args.seed)
     mlp = build_agent("mlp", (FEATURES_LEN,), 5, hidden=128)
     feats_net = fit_clone(
-        mlp.actor, norm(train.features), train.labels, args.features_epochs, args.seed, args.features_lr
+        mlp.actor, norm(train.features), train.labels, args.features_epochs, args.seed, args.features_lr, args.device
     )
     feats_net.eval()
     rows = []
@@ -302,13 +310,13 @@ def clone_rows(
         ("clone_frames", frames_net, held.frames),
         ("clone_features", feats_net, norm(held.features)),
     ):
-        agree = float((predict(net, x).argmax(-1) == held.labels).mean())
+        agree = float((predict(net, x, args.device).argmax(-1) == held.labels).mean())
         rows.append(dict(measurement=f"{name}_agreement", metric="accuracy", value=agree, baseline=base))
 
     def greedy(net: nn.Module, prepare: Callable[[np.ndarray], np.ndarray]) -> Callable[..., np.ndarray]:
         def act(obs: np.ndarray, _envs: Any) -> np.ndarray:
             with torch.no_grad():
-                return net(torch.from_numpy(prepare(obs))).argmax(-1).numpy()
+                return net(torch.from_numpy(prepare(obs)).to(args.device)).argmax(-1).cpu().numpy()
 
         return act
 
@@ -360,8 +368,8 @@ def run_size(size: int, args: argparse.Namespace, extra: dict[str, Any]) -> list
     train = collect(args.samples, args.num_envs, args.seed, pixel_options, rule_options)
     held = collect(held_n, args.num_envs, HELD_OUT_SEED + args.seed, pixel_options, rule_options)
     t_collect = time.monotonic() - t0
-    net, mean, std = fit_regressor(train, args.epochs, args.seed, args.lr)
-    pred = predict(net, held.frames) * std + mean
+    net, mean, std = fit_regressor(train, args.epochs, args.seed, args.lr, args.device)
+    pred = predict(net, held.frames, args.device) * std + mean
     rows = perception_rows(held, pred, train, size)
     t_regress = time.monotonic() - t0 - t_collect
     rows += clone_rows(train, held, args, pixel_options, rule_options)
@@ -449,6 +457,7 @@ def main() -> None:
     p.add_argument("--eval-seed", type=int, default=HELD_OUT_SEED)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--device", default="cpu", help="torch device of the networks, e.g. cuda (default cpu)")
     p.add_argument("--out", help="CSV file to append one row per size × measurement to")
     a = p.parse_args()
     sizes = [int(s) for item in (a.size or ["84,42"]) for s in item.split(",") if s.strip()]
