@@ -198,14 +198,15 @@ def fit_regressor(
     head = nn.Linear(agent.embedding_width, FEATURES_LEN)
     net = nn.Sequential(trunk, head).to(device)
     opt = torch.optim.Adam(net.parameters(), lr=lr)
-    x = torch.from_numpy(train.frames)
-    y = torch.from_numpy((train.features - mean) / std)
-    m = torch.from_numpy(mask)
+    # The whole split on the device once (no copy on the CPU): a minibatch is then gathered where it is used.
+    x = torch.from_numpy(train.frames).to(device)
+    y = torch.from_numpy((train.features - mean) / std).to(device)
+    m = torch.from_numpy(mask).to(device)
     g = torch.Generator().manual_seed(seed)
     for _ in range(epochs):
         for idx in batches(len(x), 256, g):
-            xb, yb, mb = (t[idx].to(device) for t in (x, y, m))
-            loss = ((net(xb) - yb) ** 2 * mb).sum() / mb.sum()
+            idx = idx.to(device)
+            loss = ((net(x[idx]) - y[idx]) ** 2 * m[idx]).sum() / m[idx].sum()
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -261,11 +262,12 @@ def fit_clone(
 
     net.to(device)
     opt = torch.optim.Adam(net.parameters(), lr=lr)
-    xt, yt = torch.from_numpy(x), torch.from_numpy(y)
+    xt, yt = torch.from_numpy(x).to(device), torch.from_numpy(y).to(device)
     g = torch.Generator().manual_seed(seed)
     for _ in range(epochs):
         for idx in batches(len(xt), 256, g):
-            loss = torch.nn.functional.cross_entropy(net(xt[idx].to(device)), yt[idx].to(device))
+            idx = idx.to(device)
+            loss = torch.nn.functional.cross_entropy(net(xt[idx]), yt[idx])
             opt.zero_grad()
             loss.backward()
             opt.step()
