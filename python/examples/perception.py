@@ -29,8 +29,10 @@ Then, on the held-out samples:
     then both flown greedily on `--eval-episodes` held-out seeds (from `--eval-seed`, 1,000,000; frame skip 4, the
     default 10,000-step limit), beside the heuristic and the random policy on the same seeds.
 
-Defaults (100,000 training decisions, 25,000 held out, 4 epochs at learning rate 1e-3, batches of 256) take about
-8 CPU minutes at 84×84 and 3 at 42×42 on one core; the frames of 125,000 decisions at 84×84 take 3.5 GB of memory.
+Defaults (100,000 training decisions, 25,000 held out, 4 epochs at learning rate 1e-3, batches of 256) took 8.3
+CPU minutes at 84×84 and 4.5 at 42×42 on one core of a shared 2-vCPU VM; the frames of 125,000 decisions at 84×84
+take 3.5 GB of memory. That budget leaves the regressor short of converged (docs/curves/perception/): `--device
+cuda --samples 400000 --epochs 20` is the larger one of the results there.
 
 Each size appends its rows to `--out` (CSV: one row per size × measurement; the header when the file is new), and
 a markdown table of every size is printed at the end; the last line printed is a JSON summary. One torch thread by
