@@ -103,12 +103,11 @@ CSV_FIELDS = [
 @dataclass
 class Data:
     """Samples of one split: frame stacks (uint8, `(N, H, W, k)`), features of the same states (`(N, 46)`), the
-    heuristic's action in each state (`(N,)`), and whether the action played there was a random one."""
+    heuristic's action in each state (`(N,)`)."""
 
     frames: np.ndarray
     features: np.ndarray
     labels: np.ndarray
-    explored: np.ndarray
 
 
 def collect(
@@ -133,7 +132,6 @@ def collect(
     frames = np.empty((steps, *obs.shape), obs.dtype)
     features = np.empty((steps, *feats.shape), np.float32)
     labels = np.empty((steps, num_envs), np.int64)
-    explored = np.empty((steps, num_envs), bool)
     try:
         for t in range(steps):
             label = np.asarray(heuristic.act(twin), dtype=np.int64)
@@ -141,7 +139,7 @@ def collect(
                 assert np.array_equal(label, heuristic.act(pixels))
             explore = rng.random(num_envs) < eps
             played = np.where(explore, rng.integers(0, 5, num_envs), label)
-            frames[t], features[t], labels[t], explored[t] = obs, feats, label, explore
+            frames[t], features[t], labels[t] = obs, feats, label
             obs, r, term, trunc, _ = pixels.step(played)
             feats, r2, term2, trunc2, _ = twin.step(played)
             if not (np.array_equal(r, r2) and np.array_equal(term, term2) and np.array_equal(trunc, trunc2)):
@@ -153,7 +151,7 @@ def collect(
     def flat(a: np.ndarray) -> np.ndarray:
         return a.reshape(-1, *a.shape[2:])[:samples]
 
-    return Data(flat(frames), flat(features), flat(labels), flat(explored))
+    return Data(flat(frames), flat(features), flat(labels))
 
 
 def slot_mask(features: np.ndarray) -> np.ndarray:
@@ -216,8 +214,14 @@ def fit_regressor(
 
 
 def r2(y: np.ndarray, pred: np.ndarray) -> float:
-    sst = float(((y - y.mean()) ** 2).sum())
+    """The coefficient of determination; NaN where `y` is constant or empty (a tiny run may have no bird)."""
+    sst = float(((y - y.mean()) ** 2).sum()) if len(y) else 0.0
     return 1.0 - float(((y - pred) ** 2).sum()) / sst if sst > 0 else float("nan")
+
+
+def average(x: np.ndarray) -> float:
+    """The mean of `x`, NaN where it is empty."""
+    return float(x.mean()) if len(x) else float("nan")
 
 
 def perception_rows(held: Data, pred: np.ndarray, train: Data, height: int) -> list[dict[str, Any]]:
@@ -232,7 +236,7 @@ def perception_rows(held: Data, pred: np.ndarray, train: Data, height: int) -> l
         keep = np.ones(len(held.features), bool) if present is None else held.features[:, present] == 1
         fit = np.ones(len(train.features), bool) if present is None else train.features[:, present] == 1
         y = held.features[keep, i]
-        baseline = r2(y, np.full_like(y, train.features[fit, i].mean()))
+        baseline = r2(y, np.full_like(y, average(train.features[fit, i])))
         rows.append(
             dict(measurement=name, metric="r2", value=r2(y, pred[keep, i]), baseline=baseline, support=int(keep.sum()))
         )
@@ -242,15 +246,15 @@ def perception_rows(held: Data, pred: np.ndarray, train: Data, height: int) -> l
         if name.endswith("_off_edge"):
             keep, fit = keep & clear, fit & clear_fit
         y = held.features[keep, i] > 0.5
-        majority = train.features[fit, i].mean() > 0.5
+        majority = average(train.features[fit, i]) > 0.5
         rows.append(
             dict(
                 measurement=name,
                 metric="accuracy",
-                value=float(((pred[keep, i] > 0.5) == y).mean()),
-                baseline=float((y == majority).mean()),
+                value=average((pred[keep, i] > 0.5) == y),
+                baseline=average(y == majority),
                 support=int(keep.sum()),
-                positive_share=float(y.mean()),
+                positive_share=average(y),
             )
         )
     return rows
