@@ -1,10 +1,11 @@
-"""The behaviour-cloning examples run end to end (from features: a few short episodes, one epoch; from frames: a
-few hundred decisions); the registered id form
+"""The behaviour-cloning example and the perception check run end to end (from features: a few short episodes, one
+epoch; the perception check: a few hundred decisions at two frame sizes); the registered id form
 `"chopperscape:ChopperScape-v0"` works in a fresh interpreter without importing the package first; the vector env
 uses one thread unless asked."""
 
 from __future__ import annotations
 
+import csv
 import json
 import pathlib
 import subprocess
@@ -37,14 +38,23 @@ def test_bc_example_trains_and_reports_held_out_scores(tmp_path):
         assert summary[name]["episodes"] == 3 and 0 < summary[name]["mean"] <= 200
 
 
-def test_pixel_cloning_probe_runs_and_reports_accuracy_against_the_majority_action():
-    pytest.importorskip("torch", reason="torch is not installed: the pixel cloning smoke test is skipped")
-    summary = _example("bc_pixels.py", "--samples", "640", "--epochs", "1", "--eval-episodes", "2")
-    assert summary["samples"] == 640 and summary["episodes"] == 2 and summary["mean_return"] > 0
-    # 64 held-out decisions: shares in steps of 1/64, the majority action's at least a fifth of them.
-    for key in ("held_out_accuracy", "majority_action_share"):
-        assert round(summary[key] * 64) == pytest.approx(summary[key] * 64, abs=0.05)
-    assert 0.2 <= summary["majority_action_share"] <= 1.0 and 0.0 <= summary["held_out_accuracy"] <= 1.0
+def test_perception_check_runs_at_two_sizes_and_appends_one_csv(tmp_path):
+    pytest.importorskip("torch", reason="torch is not installed: the perception check's smoke test is skipped")
+    out = tmp_path / "perception.csv"
+    args = ("--size", "84,42", "--samples", "640", "--epochs", "1", "--features-epochs", "1", "--eval-episodes", "2")
+    summary = _example("perception.py", *args, "--out", str(out))
+    with out.open() as f:
+        rows = list(csv.DictReader(f))
+    # One header, then the same measurements for each size, in the order the sizes ran.
+    assert [r["size"] for r in rows] == ["84x84"] * (len(rows) // 2) + ["42x42"] * (len(rows) // 2)
+    assert {r["size"] + ":" + r["measurement"]: float(r["value"]) for r in rows} == summary
+    for size in ("84x84", "42x42"):
+        # 160 held-out decisions: accuracies in steps of 1/160, every share in [0, 1].
+        for name in ("clone_frames_agreement", "clone_features_agreement", "bird0_present", "tank0_present"):
+            assert 0.0 <= summary[f"{size}:{name}"] <= 1.0
+            assert summary[f"{size}:{name}"] * 160 == pytest.approx(round(summary[f"{size}:{name}"] * 160), abs=0.01)
+        for name in ("clone_frames_flown", "clone_features_flown", "heuristic_flown", "random_flown"):
+            assert summary[f"{size}:{name}"] > 0
 
 
 FRESH = """
