@@ -64,23 +64,17 @@ impl Session {
     }
 
     /// A session flown by the trained policy in `policy` (the bytes of an exported `.onnx`), under the options
-    /// it was trained with, then these page options. The page observes features, so the policy must too.
+    /// it was trained with (its observation too: a pixel policy sees its small frames while the page shows the
+    /// full one), then these page options.
     ///
     /// # Errors
-    /// A file that is not a policy, a policy that observes something else than features, or a bad option.
+    /// A file that is not a policy, or a bad option.
     pub fn with_policy<'a>(
         policy: &[u8],
         options: impl IntoIterator<Item = (&'a str, &'a str)>,
     ) -> Result<Session, String> {
         let agent = chopperscape_policy::Policy::from_bytes(policy).map_err(|e| e.to_string())?;
         let config = agent.config().map_err(|e| e.to_string())?;
-        if config.obs_type != ObsType::Features {
-            return Err(format!(
-                "the page plays policies that observe features; this one observes {} (watch it with `chopperscape \
-                 record --policy FILE.onnx`)",
-                config.obs_type.as_str()
-            ));
-        }
         Session::build(config, options, Some(agent))
     }
 
@@ -346,6 +340,31 @@ mod tests {
         }
         assert_eq!(s.world(), env.world());
         assert!(s.world().steps > 10);
+    }
+
+    #[test]
+    fn the_pixel_agent_flies_on_its_own_frames_while_the_page_shows_the_full_one() {
+        // `models/ppo-pixels.onnx` learned pixel layout 2 at 84 × 84 × 4, frame skip 4: the session's env draws
+        // those frames (the art, by `render::layout_options`) for the policy and the 600 × 800 frame for the page.
+        const PIXELS: &[u8] = include_bytes!("../../../models/ppo-pixels.onnx");
+        let mut s = Session::with_policy(PIXELS, [("alien_prob", "0.05")]).unwrap();
+        s.reset(3);
+        let mut policy = chopperscape_policy::Policy::from_bytes(PIXELS).unwrap();
+        let config = policy.config().unwrap();
+        assert_eq!((config.obs_type, config.look), (ObsType::Grayscale, chopperscape::Look::Art));
+        let mut env = ChopperScape::new(Config { alien_prob: 0.05, ..config }).unwrap();
+        let (mut obs, _) = env.reset(Some(3));
+        for _ in 0..40 {
+            if s.is_over() {
+                break;
+            }
+            let a = s.agent_action().unwrap();
+            assert_eq!(a, policy.act(&obs).unwrap());
+            s.step(a as i64).unwrap();
+            obs = env.step(a as i64).unwrap().observation;
+        }
+        assert_eq!(s.world(), env.world());
+        assert_eq!(s.rgb(), env.render().as_slice());
     }
 
     #[test]
