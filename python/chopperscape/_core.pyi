@@ -20,9 +20,12 @@ CAUSE_NAMES: list[str]
 SNAPSHOT_VERSION: int
 #: The layout version of the `"features"` observation (the Rust docs of `chopperscape::features` give the history).
 FEATURES_VERSION: int
-#: The version of what pixel observations show: 2 draws the fuel and lives gauges in frames under 300 × 400
-#: (`hud_style="auto"`), 1 drew the text line at every size (docs/SPEC.md, "HUD and pixel layout").
+#: The version of what pixel observations show: 3 draws the agent view in frames under 300 × 400 (`look="auto"`),
+#: 2 the gauges there (`hud_style="auto"`), 1 the text line at every size (docs/SPEC.md, "HUD and pixel layout").
 PIXELS_VERSION: int
+#: The options that draw each pixel layout version (`chopperscape::render::layout_options`): an older model is
+#: shown its own.
+PIXEL_LAYOUTS: dict[int, dict[str, str]]
 RENDER_FPS: int
 #: The built-in policies' names, as the command line's `--policy` takes them.
 POLICY_NAMES: list[str]
