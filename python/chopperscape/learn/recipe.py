@@ -64,20 +64,21 @@ PRESETS: dict[str, dict[str, Any]] = {
     },
 }
 #: Learning in minutes (`--preset fast`; docs/learning.md, "Learning in minutes"): the features recipe at frame skip
-#: 4 (env steps count decisions; γ = 0.998 per decision is 0.9995 per frame) for 2 M decisions, with a larger batch
+#: 4 (env steps count decisions; γ = 0.998 per decision is 0.9995 per frame) for 3 M decisions, with a larger batch
 #: per Python step (128 envs × 128 steps), 2 epochs of 4 minibatches (a quarter of the recipe's gradient steps per
-#: sample) at a learning rate of 1e-3, and entropy 0.01. It carries its own step budget, so `--preset fast` alone is
-#: the benchmark's run. Chosen by the probes in docs/curves/fast-probes/ (about 90 CPU seconds a run).
+#: sample) at a learning rate of 1e-3, entropy 0.01 and GAE λ 0.98. It carries its own step budget, so `--preset fast`
+#: alone is the benchmark's run. Chosen by the probes in docs/curves/fast-probes/ (about 2 CPU minutes a run).
 PRESETS["fast"] = {
     "env_options": {"frame_skip": 4},
     "gamma": 0.998,
+    "gae_lambda": 0.98,
     "num_envs": 128,
     "num_steps": 128,
     "num_minibatches": 4,
     "update_epochs": 2,
     "learning_rate": 1e-3,
     "ent_coef": 0.01,
-    "total_steps": 2_000_000,
+    "total_steps": 3_000_000,
 }
 #: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 8× the envs, so that each
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
