@@ -62,7 +62,7 @@ pub use config::{
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;
-pub use modes::{MODES, Mode, mode, mode_names};
+pub use modes::{MODES, Mode, configure, mode, mode_names};
 pub use obs_buffer::{ObsBufMut, ObsData, Observation};
 pub use obs_pipeline::luma;
 pub use rng::Rng;
