@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from chopperscape.learn import train
-from chopperscape.learn.evaluate import load_recipe, play_episodes
+from chopperscape.learn.episodes import play_episodes
+from chopperscape.learn.players import load_recipe
 from chopperscape.learn.recipe import PRESETS, Recipe
 
 
