@@ -1,6 +1,6 @@
 """How the fast preset's figures were measured: train one recipe per training seed (``--preset fast`` with optional
 overrides), evaluate it greedily on the 100 held-out seeds from 1,000,000, and append a CSV row with the training's
-wall and CPU time. The same runs as ``python -m chopperscape.learn.train --seeds ... --preset fast`` (the runs are
+wall and CPU time. The same runs as ``python -m chopperscape.learn.seeds --seeds ... --preset fast`` (the runs are
 deterministic: the same seed gives the same model), in one process so that the CPU time is the training's own.
 
     python docs/curves/fast-probes/measure.py OUT.csv 0,1,2 [--set '{"update_epochs": 4, "learning_rate": 5e-4}']
