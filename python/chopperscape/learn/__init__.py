@@ -9,6 +9,7 @@ module                 what it holds
 :mod:`.flags`          the training flags as a checked :class:`~.recipe.Recipe`, for ``train`` and ``seeds`` (no torch)
 :mod:`.model`          the networks, the observation normaliser, the checkpoint format (read and written)
 :mod:`.train`          the PPO loop in CleanRL-style sections, and ``python -m chopperscape.learn.train``
+:mod:`.guidance`       pixel recipes' guidance from the game's features (auxiliary loss, teacher), a loop part
 :mod:`.phases`         the loop's per-phase stopwatch
 :mod:`.progress`       the learning-curve CSV's one schema: a writer and a reader (no torch)
 :mod:`.episodes`       a policy played on seeds, its episodes summarised in constant memory
