@@ -1,16 +1,21 @@
-"""What the package's command lines (`python -m chopperscape.learn.train`, `.evaluate`, `.datasets`) share: reading
-`--option NAME=VALUE` per option type, and writing the result line to standard output."""
+"""What the package's command lines (`python -m chopperscape.learn.train`, `.evaluate`, `.datasets`, ...) share:
+reading `--option NAME=VALUE` per option type, the exit status of each error (`run`), and writing the result line
+to standard output."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from . import _core
+from . import _core, _signals
+
+#: Exit statuses of every command of the package (argparse's own usage errors are 2 too).
+FAILED, REFUSED = 1, 2
 
 #: Every option of the core (`Config::set`), as `--option` takes it, `max_episode_steps` included.
 CORE_OPTIONS: tuple[str, ...] = tuple(_core.OPTION_NAMES)
@@ -83,6 +88,42 @@ def env_options(
         return parse_options(items, allowed, refused)
     except ValueError as e:
         parser.error(str(e))
+
+
+def run_command(command: Callable[[], int]) -> int:
+    """Runs a command's work and returns its exit status: what `command` returns, or for what it raises, one line
+    on standard error and the status every command of the package gives it (the one map from errors to statuses):
+
+    - `ValueError`, `ImportError`: `error: ...`, 2 (`REFUSED`): the input is refused (a flag, a file, an option,
+      a missing optional package), as argparse refuses a usage;
+    - `OSError`, `RuntimeError`, `FloatingPointError`: `error: ...`, 1 (`FAILED`): the work failed (a write, a
+      check, a training step);
+    - `_signals.Interrupted`: its own message (`interrupted; ...`), 128 + the signal: 130, 143, 129.
+
+    An `OSError` in its own words (no file name) is said without its errno (`[Errno 28]`). A command says what
+    failed in its exception's message, so nothing is added to it here."""
+    try:
+        return command()
+    except _signals.Interrupted as e:
+        print(e, file=sys.stderr)
+        return e.exit_code
+    except (ValueError, ImportError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return REFUSED
+    except (OSError, RuntimeError, FloatingPointError) as e:
+        said = e.strerror if isinstance(e, OSError) and e.strerror and not e.filename else e
+        print(f"error: {said}", file=sys.stderr)
+        return FAILED
+
+
+@contextlib.contextmanager
+def cannot(what: str) -> Iterator[None]:
+    """An `OSError` in the block as one saying what could not be done: `with cannot(f"write {path}"):` makes a full
+    disk `OSError("cannot write PATH: No space left on device")`, which `run_command` turns into exit status 1."""
+    try:
+        yield
+    except OSError as e:
+        raise OSError(f"cannot {what}: {e.strerror or e}") from None
 
 
 def print_line(text: str) -> int:

@@ -290,7 +290,7 @@ def clone_rows(
     """Clones from frames and from features: held-out agreement, then greedy flights on held-out seeds."""
     import torch
 
-    from chopperscape.learn import evaluate
+    from chopperscape.learn import episodes
     from chopperscape.learn.model import build_agent
     from chopperscape.policies import VectorPolicy
 
@@ -349,7 +349,7 @@ def clone_rows(
     ]
     t0 = time.monotonic()
     for name, act, options in flights:
-        s = evaluate.summary(evaluate.play_episodes(act, args.eval_episodes, args.eval_seed, options))
+        s = episodes.summary(episodes.play_episodes(act, args.eval_episodes, args.eval_seed, options))
         rows.append(
             dict(
                 measurement=name,

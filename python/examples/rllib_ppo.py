@@ -252,7 +252,7 @@ def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
 
     import chopperscape
     from chopperscape.integrations.rllib import float_pixels
-    from chopperscape.learn import evaluate as chopper_eval
+    from chopperscape.learn import episodes as chopper_episodes
 
     module = algo.get_module()
     probe = chopperscape.VectorEnv(1, **args.env_config)
@@ -276,9 +276,9 @@ def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
 
     options = {k: v for k, v in args.env_config.items() if k != "max_episode_steps"}
     limit = args.env_config.get("max_episode_steps", 10_000)
-    results = chopper_eval.play_episodes(act, args.eval_episodes, args.eval_seed, options, max_episode_steps=limit)
+    results = chopper_episodes.play_episodes(act, args.eval_episodes, args.eval_seed, options, max_episode_steps=limit)
     out: dict[str, Any] = {"model": args.checkpoint or args.restore or "rllib", "seed": args.eval_seed, "greedy": True}
-    out.update(chopper_eval.summary(results))
+    out.update(chopper_episodes.summary(results))
     return out
 
 

@@ -1,5 +1,8 @@
-"""Shared settings: short episodes, so a few hundred steps hold many autoresets."""
+"""Shared settings: short episodes, so a few hundred steps hold many autoresets; the optional packages a test needs;
+reading a progress CSV back."""
 
+import csv
+import importlib.util
 import os
 
 import pytest
@@ -13,9 +16,26 @@ import chopperscape  # noqa: F401  (registers ChopperScape-v0)
 SHORT = {"obs_type": "features", "max_fuel": 40, "bird_prob": 0.2, "fuel_prob": 0.05}
 
 
+#: Tests of the learning tool chain need torch, and those of the SB3 adapter SB3 too (scripts/test-python.sh installs
+#: both; under CI=true a skip fails the run).
+needs_torch = pytest.mark.skipif(
+    importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
+)
+needs_sb3 = pytest.mark.skipif(
+    importlib.util.find_spec("stable_baselines3") is None or importlib.util.find_spec("torch") is None,
+    reason="stable-baselines3 is not installed (scripts/test-python.sh installs it)",
+)
+
+
 @pytest.fixture
 def short():
     return dict(SHORT)
+
+
+def progress_rows(path):
+    """The rows of a progress CSV, as dicts of text."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:

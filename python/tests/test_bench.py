@@ -19,6 +19,7 @@ from chopperscape.bench import evaluate, protocol, report, results
 from chopperscape.bench.__main__ import main
 from chopperscape.learn import recipe as recipe_mod
 from chopperscape.learn import seeds as learn_seeds
+from chopperscape.learn import stats as learn_stats
 
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "bench" / "results"
@@ -250,9 +251,9 @@ def test_bootstrap_intervals():
     # Constant runs: no spread at all.
     flat = report.interval_estimates([np.full(5, 0.4)], resamples=500)
     assert all(a["low"] == a["high"] == pytest.approx(a["point"]) for a in flat.values())
-    # With one task the stratified bootstrap is the plain one over runs (learn.seeds.bootstrap_ci, same draws).
+    # With one task the stratified bootstrap is the plain one over runs (learn.stats.bootstrap_ci, same draws).
     x = np.array([0.1, 0.5, 0.2, 0.9, 0.4, 0.45, 0.3, 0.8, 0.7, 0.05])
-    lo, hi = learn_seeds.bootstrap_ci(x, resamples=4000, seed=0)
+    lo, hi = learn_stats.bootstrap_ci(x, resamples=4000, seed=0)
     one = report.interval_estimates([x], resamples=4000, seed=0)["iqm"]
     assert (one["low"], one["high"]) == pytest.approx((lo, hi))
     # Reproducible: a seeded generator.

@@ -19,6 +19,7 @@ pytest.importorskip("PIL", reason="pillow is not installed (Minari's HDF5 storag
 from test_policies import cli  # noqa: E402
 
 from chopperscape.integrations import datasets  # noqa: E402
+from chopperscape.integrations.datasets import cli as datasets_cli  # noqa: E402
 
 
 @pytest.fixture(autouse=True)
@@ -172,7 +173,7 @@ def test_action_logs_that_do_not_replay_are_refused_and_write_nothing(tmp_path, 
 
 
 def test_the_module_command_line_writes_a_dataset(datasets_path, capsys):
-    rc = datasets.main(
+    rc = datasets_cli.main(
         [
             "--out",
             "cs/cli-v0",
@@ -192,7 +193,7 @@ def test_the_module_command_line_writes_a_dataset(datasets_path, capsys):
     assert rc == 0, capsys.readouterr().err
     ds = minari.load_dataset("cs/cli-v0")
     assert ds.total_episodes == 2 and ds.storage.metadata["seeds"] == [4, 5]
-    assert datasets.main(["--out", "cs/cli-v0", "--episodes", "1", "--no-progress"]) == 2
+    assert datasets_cli.main(["--out", "cs/cli-v0", "--episodes", "1", "--no-progress"]) == 2
     assert "already exists" in capsys.readouterr().err
 
 

@@ -21,6 +21,7 @@ from test_policies import cli
 
 from chopperscape import _cli, policies
 from chopperscape.integrations import datasets
+from chopperscape.integrations.datasets import cli as datasets_cli
 
 #: A collection that takes minutes: stopped by the tests long before it ends.
 LONG = [
@@ -205,8 +206,8 @@ def test_a_second_writer_of_one_id_is_refused_before_it_collects(datasets_path, 
 FULL = """
 import resource, sys
 resource.setrlimit(resource.RLIMIT_FSIZE, (20 << 20, 20 << 20))
-from chopperscape.integrations import datasets
-sys.exit(datasets.main(sys.argv[1:]))
+from chopperscape.integrations.datasets import cli
+sys.exit(cli.main(sys.argv[1:]))
 """
 
 
@@ -278,7 +279,7 @@ def test_ids_and_places_are_checked_before_anything_is_played(datasets_path, tmp
 
 
 def test_the_module_defaults_to_features_as_the_command_line(datasets_path):
-    assert datasets.main(["--out", "cs/default-v0", "--no-progress", "--option", "max_episode_steps=20"]) == 0
+    assert datasets_cli.main(["--out", "cs/default-v0", "--no-progress", "--option", "max_episode_steps=20"]) == 0
     ds = minari.load_dataset("cs/default-v0")
     assert ds.observation_space.shape == (46,) and ds.total_steps == 20
 
@@ -288,7 +289,7 @@ def test_policy_flags_with_from_logs_are_refused(tmp_path, flags, capsys):
     log = tmp_path / "a.json"
     log.write_text("{}")
     with pytest.raises(SystemExit) as e:
-        datasets.main(["--out", "cs/logs-v0", "--from-logs", str(log), *flags])
+        datasets_cli.main(["--out", "cs/logs-v0", "--from-logs", str(log), *flags])
     assert e.value.code == 2 and "cannot be given with --from-logs" in capsys.readouterr().err
 
 
@@ -310,7 +311,7 @@ def test_hud_false_and_other_typed_options_from_the_command_line(datasets_path):
         "--option",
         "lives=2",
     ]
-    assert datasets.main(args) == 0
+    assert datasets_cli.main(args) == 0
     kwargs = minari.load_dataset("cs/hud-v0").spec.env_spec.kwargs
     assert kwargs["hud"] is False and tuple(kwargs["obs_size"]) == (24, 32) and kwargs["lives"] == 2
     exe = cli()
@@ -398,7 +399,7 @@ def test_max_episode_steps_none_is_no_time_limit_everywhere(tmp_path, datasets_p
     assert ds.total_steps == 12_000 and ds.storage.metadata["max_episode_steps"] is None
     assert minari.load_dataset("cs/endless-v0").spec.env_spec.max_episode_steps is None
     assert (
-        datasets.main(
+        datasets_cli.main(
             [
                 "--out",
                 "cs/endless-cli-v0",

@@ -342,14 +342,13 @@ def test_summarise_refuses_each_crafted_file_by_name_and_writes_nothing(name, co
     assert captured.out == "" and sorted(os.listdir(tmp_path)) == before
 
 
-def test_summarise_writes_valid_json_from_good_files(tmp_path, capsys, monkeypatch):
+def test_summarise_writes_valid_json_from_good_files(tmp_path, capsys):
     for k in (0, 1):
         (tmp_path / f"seed-{k}.eval.json").write_bytes(_eval_with(mean_return=5000.0 + k))
         (tmp_path / f"seed-{k}.csv").write_text(GOOD_CSV)
     for name, mean in (("random", 10.0), ("heuristic", 3000.0)):
         doc = {**GOOD_EVAL, "mean_return": mean, "runner": {"episodes": 100, "seed": 1_000_000, "option": []}}
         (tmp_path / f"baseline-{name}.json").write_text(json.dumps(doc))
-    monkeypatch.setattr(seeds, "RESAMPLES", 200)
     assert seeds.main(["--summarise", str(tmp_path), "--steps", "200"]) == 0
     summary = json.loads(
         (tmp_path / "summary.json").read_text(),

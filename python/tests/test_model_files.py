@@ -12,17 +12,9 @@ import pickle
 import zipfile
 
 import pytest
-from conftest import SHORT
+from conftest import SHORT, needs_sb3, needs_torch
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-
-needs_torch = pytest.mark.skipif(
-    importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
-)
-needs_sb3 = pytest.mark.skipif(
-    importlib.util.find_spec("stable_baselines3") is None or importlib.util.find_spec("torch") is None,
-    reason="stable-baselines3 is not installed (scripts/test-python.sh installs it)",
-)
 
 
 class Payload:

@@ -1,4 +1,5 @@
-"""The progress CSV schema (chopperscape.learn.progress): what every learner writes and plot/seeds read."""
+"""The progress CSV schema (chopperscape.learn.progress): what every learner writes and plot/seeds read; the plot
+of progress CSVs (`python -m chopperscape.learn.plot`)."""
 
 import math
 
@@ -112,3 +113,38 @@ def test_a_writer_makes_missing_folders(tmp_path):
     with progress.Writer(tmp_path / "a" / "b" / "c" / "progress.csv") as w:
         w.row({"env_steps": 1})
     assert (tmp_path / "a" / "b" / "c" / "progress.csv").is_file()
+
+
+def test_plot_draws_progress_csvs_and_names_a_bad_one(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed")
+    from chopperscape.learn import plot
+
+    good = tmp_path / "run" / "progress.csv"
+    good.parent.mkdir()
+    good.write_text(
+        "env_steps,wall_s,episodes,mean_return,std_return,mean_length\n1000,1.0,3,500,100,510\n2000,2.0,6,900,150,910\n"
+    )
+    out = tmp_path / "curve.png"
+    assert plot.main([str(good), "--out", str(out), "--hline", "random=600"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = tmp_path / "bad.csv"
+    bad.write_text("steps,return\n1,2\n")
+    assert plot.main([str(bad), "--out", str(tmp_path / "x.png")]) == 2
+    assert "missing columns" in capsys.readouterr().err and not (tmp_path / "x.png").exists()
+    # --frame-skip: one per CSV; the left panel then counts game frames (env steps × frame skip).
+    import matplotlib.axes
+
+    drawn = []
+    real_plot = matplotlib.axes.Axes.plot
+    monkeypatch.setattr(
+        matplotlib.axes.Axes, "plot", lambda ax, x, *r, **k: drawn.append(list(x)) or real_plot(ax, x, *r, **k)
+    )
+    assert plot.main([str(good), str(good), "--frame-skip", "1", "--frame-skip", "4", "--out", str(out)]) == 0
+    assert drawn == [[0.001, 0.002], [1 / 60, 2 / 60], [0.004, 0.008], [1 / 60, 2 / 60]]
+    for args, message in (
+        (["--frame-skip", "4"], "1 --frame-skip for 2 CSV files"),
+        (["--frame-skip", "0"] * 2, "allowed an integer ≥ 1"),
+    ):
+        with pytest.raises(SystemExit):
+            plot.main([str(good), str(good), *args, "--out", str(tmp_path / "y.png")])
+        assert message in capsys.readouterr().err and not (tmp_path / "y.png").exists()

@@ -1,5 +1,5 @@
 """The native vector env: the same results as Gymnasium's SyncVectorEnv of single envs, its conventions,
-copy modes, refusals, and the worker pool across fork()."""
+copy modes, refusals, the worker pool across fork(), Gymnasium's vector wrappers on it, and `keep_dim`."""
 
 from __future__ import annotations
 
@@ -281,3 +281,55 @@ def test_restoring_a_state_of_other_options_changes_nothing():
 def test_package_exports():
     assert chopperscape.VectorEnv is VectorEnv
     assert chopperscape.ACTION_MEANINGS == ["Right", "Left", "Down", "Up", "Do Nothing"]
+
+
+def test_gymnasium_vector_wrappers_on_the_native_batch():
+    from gymnasium.wrappers.vector import (
+        ClipReward,
+        NormalizeObservation,
+        NormalizeReward,
+        RecordEpisodeStatistics,
+        TransformObservation,
+    )
+
+    envs = VectorEnv(4, **SHORT)
+    wrapped = ClipReward(NormalizeReward(NormalizeObservation(RecordEpisodeStatistics(envs))), -5, 5)
+    wrapped = TransformObservation(wrapped, lambda o: o * 2)
+    obs, _ = wrapped.reset(seed=3)
+    assert obs.shape == (4, envs.single_observation_space.shape[0])
+    finished = 0
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        obs, rew, _term, _trunc, info = wrapped.step(rng.integers(0, 5, 4))
+        assert np.isfinite(obs).all() and np.isfinite(rew).all() and (np.abs(rew) <= 5).all()
+        if "episode" in info:
+            finished += int(info["_episode"].sum())
+            assert (info["episode"]["l"][info["_episode"]] > 0).all()
+    assert finished > 5
+
+
+@pytest.mark.parametrize("mode", ["NEXT_STEP", "SAME_STEP"])
+def test_keep_dim_gives_grayscale_a_channel_axis_everywhere(mode):
+    options = dict(obs_type="grayscale", obs_size=(84, 84), max_fuel=30)
+    env = gym.make("ChopperScape-v0", keep_dim=True, **options)
+    plain = gym.make("ChopperScape-v0", **options)
+    assert env.observation_space.shape == (84, 84, 1)
+    obs, _ = env.reset(seed=2)
+    ref, _ = plain.reset(seed=2)
+    assert obs.shape == (84, 84, 1) and np.array_equal(obs[..., 0], ref) and env.observation_space.contains(obs)
+    obs, *_ = env.step(3)
+    assert np.array_equal(obs[..., 0], plain.step(3)[0])
+    envs = VectorEnv(2, keep_dim=True, autoreset_mode=gym.vector.AutoresetMode[mode], copy=False, **options)
+    assert envs.single_observation_space.shape == (84, 84, 1) and envs.observation_space.shape == (2, 84, 84, 1)
+    obs, _ = envs.reset(seed=2)
+    assert obs.shape == (2, 84, 84, 1) and np.array_equal(obs[0, ..., 0], ref) and not obs.flags.writeable
+    for _ in range(40):
+        obs, _, _term, _trunc, info = envs.step(np.array([4, 4]))
+        assert obs.shape == (2, 84, 84, 1)
+        if "final_obs" in info:
+            assert all(f.shape == (84, 84, 1) for f in info["final_obs"][info["_final_obs"]])
+    # Stacked or colour frames already have a channel axis: keep_dim changes nothing there.
+    stacked = gym.make("ChopperScape-v0", keep_dim=True, obs_type="grayscale", obs_size=(84, 84), frame_stack=4)
+    assert stacked.observation_space.shape == (84, 84, 4)
+    with pytest.raises(ValueError, match="keep_dim"):
+        gym.make("ChopperScape-v0", keep_dim="yes")

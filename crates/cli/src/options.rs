@@ -4,8 +4,8 @@
 //! Each flag is checked while parsing by `Config::set` on its SPEC name, so a bad value fails with clap's usage
 //! error (exit code 2) and the core's message naming the option and its allowed range.
 
-use anyhow::{Context, Result};
-use chopperscape::{CliFlag, Config, MODES, Mode, OPTIONS, OptionInfo, option_info};
+use anyhow::Result;
+use chopperscape::{CliFlag, Config, ConfigError, MODES, Mode, OPTIONS, OptionInfo, option_info};
 use clap::builder::PossibleValuesParser;
 use clap::{Arg, ArgAction, ArgMatches, Command};
 
@@ -105,29 +105,18 @@ impl GameOptions {
         fixed.chain(self.values.iter().filter(|(o, _)| o.rule).map(|(o, v)| (o.name, v.as_str()))).collect()
     }
 
-    /// `base` with these options applied, `--hud-style` included: the mode's rules first, then the flags.
+    /// `base` with these options applied, `--hud-style` included: the mode's rules first, then the flags
+    /// (the core's [`chopperscape::configure`], as Python and the page build theirs).
     ///
     /// # Errors
     /// A flag that contradicts `--mode` ([`crate::UsageError`], exit code 2); a value `Config::set` refuses
     /// (already checked while parsing, so only in theory).
-    pub fn apply(&self, mut base: Config) -> Result<Config> {
-        if let Some(mode) = self.mode {
-            mode.apply(&mut base).with_context(|| format!("mode {}", mode.name))?;
-        }
-        for (o, value) in &self.values {
-            base.set(o.name, value).with_context(|| format!("option {}", o.name))?;
-        }
-        if let Some(mode) = self.mode {
-            let wrong = mode.contradictions(&base);
-            if !wrong.is_empty() {
-                crate::usage_bail!(
-                    "options contradict --mode {}, whose rules options are fixed: {}; drop them, or give no --mode",
-                    mode.name,
-                    wrong.join(", ")
-                );
-            }
-        }
-        Ok(base)
+    pub fn apply(&self, base: Config) -> Result<Config> {
+        chopperscape::configure(base, self.mode, |c| self.values.iter().try_for_each(|(o, value)| c.set(o.name, value)))
+            .map_err(|e| match e {
+                ConfigError::ModeContradiction { .. } => anyhow::Error::new(crate::UsageError(e.to_string())),
+                e => anyhow::Error::new(e),
+            })
     }
 }
 
@@ -246,7 +235,10 @@ mod tests {
         let clash = parse(&["--mode", "full-v0", "--lives", "7"]).unwrap();
         let err = clash.apply(Config::default()).unwrap_err();
         assert!(err.downcast_ref::<crate::UsageError>().is_some(), "{err}");
-        assert!(err.to_string().contains("contradict --mode full-v0") && err.to_string().contains("lives"), "{err}");
+        assert!(
+            err.to_string().contains("contradict mode \"full-v0\"") && err.to_string().contains("lives 7 != 3"),
+            "{err}"
+        );
         let v0 = parse(&["--mode", "v0", "--frame-skip", "4"]).unwrap();
         assert!(v0.apply(Config::default()).is_err(), "v0 fixes frame_skip at 1");
         assert!(parse(&["--mode", "sticky-v0"]).unwrap().given().contains(&("sticky_prob", "0.25")));

@@ -8,9 +8,8 @@ use assert_cmd::Command;
 use predicates::prelude::*;
 use serde_json::Value;
 
-fn cs() -> Command {
-    Command::cargo_bin("chopperscape").unwrap()
-}
+mod common;
+use common::{bin, cs};
 
 fn stdout_of(cmd: &mut Command) -> String {
     let out = cmd.assert().success().get_output().stdout.clone();
@@ -339,8 +338,7 @@ fn web_serves_the_page_with_correct_content_types() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("index.html"), "<html>hi</html>").unwrap();
     std::fs::write(dir.path().join("game.wasm"), b"\0asm\x01\0\0\0").unwrap();
-    let bin = assert_cmd::cargo::cargo_bin("chopperscape");
-    let mut child = StdCommand::new(bin)
+    let mut child = StdCommand::new(bin())
         .args(["web", "--port", "0", "--dir"])
         .arg(dir.path())
         .stdout(std::process::Stdio::piped())

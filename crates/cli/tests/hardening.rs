@@ -7,18 +7,10 @@ use std::path::Path;
 use std::process::{Command as StdCommand, Stdio};
 use std::time::{Duration, Instant};
 
-use assert_cmd::Command;
 use predicates::prelude::*;
 
-fn cs() -> Command {
-    let mut c = Command::cargo_bin("chopperscape").unwrap();
-    c.timeout(Duration::from_secs(120));
-    c
-}
-
-fn bin() -> std::path::PathBuf {
-    assert_cmd::cargo::cargo_bin("chopperscape")
-}
+mod common;
+use common::{bin, cs};
 
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> =

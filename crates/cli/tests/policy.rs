@@ -3,18 +3,16 @@
 
 use std::path::Path;
 
-use assert_cmd::Command;
 use predicates::prelude::*;
 use prost::Message;
 use serde_json::Value;
 use tract_onnx::pb::{AttributeProto, ModelProto, NodeProto, TensorProto};
 
+mod common;
+use common::cs;
+
 const FEATURES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/ppo-features.onnx");
 const PIXELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../policy/tests/data/pixels-untrained.onnx");
-
-fn cs() -> Command {
-    Command::cargo_bin("chopperscape").unwrap()
-}
 
 #[test]
 fn record_policy_writes_the_gif_and_an_action_log_that_replays() {

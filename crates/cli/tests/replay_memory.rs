@@ -1,6 +1,8 @@
 //! Reading an action log takes memory in proportion to the file, not fifty times it. (Its own test binary, so
 //! that the peak memory of the children it waits for is that of the one replay it runs.)
 
+mod common;
+
 #[cfg(target_os = "linux")]
 #[test]
 fn a_long_action_log_is_parsed_in_little_more_memory_than_its_size() {
@@ -14,11 +16,7 @@ fn a_long_action_log_is_parsed_in_little_more_memory_than_its_size() {
     text.push_str(&"3,".repeat(actions - 1));
     text.push_str("3]}");
     std::fs::write(&log, &text).unwrap();
-    let out = std::process::Command::new(assert_cmd::cargo::cargo_bin("chopperscape"))
-        .arg("replay")
-        .arg(&log)
-        .output()
-        .unwrap();
+    let out = std::process::Command::new(common::bin()).arg("replay").arg(&log).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains(&format!("`steps` is 1 but the log holds {actions} actions")), "{err}");
     let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();

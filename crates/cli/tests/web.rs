@@ -8,6 +8,8 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
 /// A running `chopperscape web`, killed on drop.
 struct Server {
     child: Child,
@@ -17,7 +19,7 @@ struct Server {
 impl Server {
     /// Serves `dir`, with at most `open_files` file descriptors when given (through the shell's `ulimit -n`).
     fn start(dir: &Path, open_files: Option<u32>) -> Server {
-        let bin = assert_cmd::cargo::cargo_bin("chopperscape");
+        let bin = common::bin();
         let mut cmd = match open_files {
             Some(n) => {
                 let mut c = Command::new("sh");
@@ -231,8 +233,7 @@ fn paths_are_percent_decoded_and_escaped_dot_dot_is_refused() {
 #[test]
 fn a_host_that_is_not_loopback_is_warned_about() {
     let dir = page();
-    let bin = assert_cmd::cargo::cargo_bin("chopperscape");
-    let mut child = Command::new(bin)
+    let mut child = Command::new(common::bin())
         .args(["web", "--port", "0", "--host", "0.0.0.0", "--dir"])
         .arg(dir.path().join("dist"))
         .stdout(Stdio::piped())
@@ -252,8 +253,7 @@ fn a_host_that_is_not_loopback_is_warned_about() {
 #[test]
 fn a_file_given_as_the_folder_is_named_as_not_a_folder() {
     let dir = page();
-    assert_cmd::Command::cargo_bin("chopperscape")
-        .unwrap()
+    common::cs()
         .args(["web", "--dir"])
         .arg(dir.path().join("dist/index.html"))
         .assert()

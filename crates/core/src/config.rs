@@ -9,6 +9,8 @@
 //! [`Config::get`], [`Config::set`] and [`Config::value`]. Adding an option is adding one row.
 
 use crate::error::ConfigError;
+use crate::features::FEATURES_LEN;
+use crate::limits::{MAX_ENV_BYTES, check_budget};
 
 /// One option of SPEC.md, described once: the command line's flags and help, the web page's options, the Python
 /// binding (`_core.OPTIONS`) and the tests of the Python docs read it from here.
@@ -371,7 +373,7 @@ macro_rules! options {
                             )?;
                         }
                     )*
-                    _ => return Err(ConfigError::Unknown { name: name.to_string() }),
+                    _ => return Err(ConfigError::Unknown { name: name.to_string(), allowed: OPTION_NAMES }),
                 }
                 Ok(())
             }
@@ -668,16 +670,46 @@ impl Config {
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.check_ranges()?;
         let (h, w) = self.obs_size;
-        crate::limits::check_budget(
+        check_budget(
             format!(
                 "one environment's observation buffers (obs_type \"{}\", obs_size ({h}, {w}), frame_stack {})",
                 self.obs_type.as_str(),
                 self.frame_stack
             ),
-            crate::limits::env_bytes(self),
-            crate::limits::MAX_ENV_BYTES,
+            self.env_bytes(),
+            MAX_ENV_BYTES,
             "choose a smaller obs_size or frame_stack, or obs_type \"grayscale\" or \"features\"",
         )
+    }
+
+    /// Bytes of one observation (frame stack included): what a caller's buffer for it takes.
+    pub fn observation_bytes(&self) -> u64 {
+        let (single, elem) = self.single_observation();
+        single * u64::from(self.frame_stack) * elem
+    }
+
+    /// Bytes one environment's observation buffers take: the canvas it draws into, the frame stack and its
+    /// scratch frame (`frame_stack > 1`), and one observation in the caller's buffer. Exact up to the renderer's
+    /// sprites and HUD (a few hundred kilobytes at most). Cannot overflow within the options' ranges. What
+    /// [`Config::validate`] holds to [`MAX_ENV_BYTES`](crate::limits::MAX_ENV_BYTES).
+    pub fn env_bytes(&self) -> u64 {
+        let (single, elem) = self.single_observation();
+        // The canvas holds one byte per element of an unstacked observation (RGB or gray); features draw nothing.
+        let canvas = if self.obs_type.is_pixels() { single } else { 0 };
+        let observation = self.observation_bytes();
+        let stack = if self.frame_stack > 1 { observation + single * elem } else { 0 };
+        canvas + stack + observation
+    }
+
+    /// Elements of one unstacked observation and bytes per element.
+    fn single_observation(&self) -> (u64, u64) {
+        let (h, w) = (u64::from(self.obs_size.0), u64::from(self.obs_size.1));
+        match self.obs_type {
+            ObsType::Rgb => (h * w * 3, 1),
+            ObsType::RgbFloat => (h * w * 3, 4),
+            ObsType::Grayscale => (h * w, 1),
+            ObsType::Features => (FEATURES_LEN as u64, 4),
+        }
     }
 
     /// The options that differ between `self` and `other`, each as `name self_value != other_value` (values as
@@ -712,6 +744,22 @@ impl Config {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_default_env_takes_two_rgb_frames() {
+        assert_eq!(Config::default().env_bytes(), 2 * 600 * 800 * 3);
+        assert_eq!(Config::features().env_bytes(), FEATURES_LEN as u64 * 4);
+        assert_eq!(Config::features().observation_bytes(), FEATURES_LEN as u64 * 4);
+    }
+
+    #[test]
+    fn the_largest_options_are_over_the_budget() {
+        let c = Config { obs_size: (4096, 4096), frame_stack: 64, obs_type: ObsType::RgbFloat, ..Config::default() };
+        assert_eq!(c.env_bytes(), 4096 * 4096 * 3 * (2 * 64 * 4 + 4 + 1));
+        assert!(c.env_bytes() > MAX_ENV_BYTES);
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("over the budget of 4.0 GiB") && err.contains("obs_size (4096, 4096)"), "{err}");
+    }
 
     #[test]
     fn default_is_valid_v0() {

@@ -99,7 +99,7 @@ impl ChopperScape {
         let game = Game::new(config)?;
         // Everything the observation buffers take, asked of the system at once: a refusal is an error here,
         // never an abort in the middle of building them (or of the caller's first observation).
-        crate::limits::probe(crate::limits::env_bytes(game.config()), "one environment's observation buffers")?;
+        crate::limits::probe(game.config().env_bytes(), "one environment's observation buffers")?;
         let observer = Observer::new(game.config())?;
         Ok(ChopperScape { game, observer })
     }

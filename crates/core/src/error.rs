@@ -1,6 +1,21 @@
 //! Typed errors. Every message names the bad value and what is allowed.
+//!
+//! The bottom of the crate: it uses no other module, so the option table (`config.rs`), the memory budgets
+//! (`limits.rs`) and the modes (`modes.rs`) all build on it and none of them on each other in a circle.
 
 use thiserror::Error;
+
+/// `n` bytes for people: `"12.0 GiB (12884901888 bytes)"` (what the memory errors say).
+pub fn format_bytes(n: u64) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = n as f64;
+    let mut unit = 0;
+    while v >= 1024.0 && unit + 1 < UNITS.len() {
+        v /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 { format!("{n} bytes") } else { format!("{v:.1} {} ({n} bytes)", UNITS[unit]) }
+}
 
 /// An option of [`crate::Config`] outside its allowed range, or an unknown option.
 #[derive(Clone, Debug, PartialEq, Error)]
@@ -16,11 +31,11 @@ pub enum ConfigError {
         /// The allowed range or set, in words.
         allowed: &'static str,
     },
-    /// Options whose buffers would take more memory than the budget ([`crate::limits`]).
+    /// Options whose buffers would take more memory than the budget (the budgets are in `limits.rs`).
     #[error(
         "{what} would take {} of memory, over the budget of {}: {hint}",
-        crate::limits::format_bytes(*needed),
-        crate::limits::format_bytes(*budget)
+        format_bytes(*needed),
+        format_bytes(*budget)
     )]
     TooLarge {
         /// What would be allocated, with the options that size it.
@@ -35,7 +50,7 @@ pub enum ConfigError {
     /// The system refused memory for a buffer within the budget (for example under `ulimit -v`).
     #[error(
         "could not allocate {} for {what}: the system refused the memory (is a memory limit such as ulimit -v set?)",
-        crate::limits::format_bytes(*needed)
+        format_bytes(*needed)
     )]
     OutOfMemory {
         /// What was being allocated.
@@ -44,10 +59,25 @@ pub enum ConfigError {
         needed: u64,
     },
     /// An option name that does not exist.
-    #[error("unknown option `{name}`: allowed options are {}", crate::config::OPTION_NAMES.join(", "))]
+    #[error("unknown option `{name}`: allowed options are {}", allowed.join(", "))]
     Unknown {
         /// The name given.
         name: String,
+        /// Every option name there is ([`crate::OPTION_NAMES`]).
+        allowed: &'static [&'static str],
+    },
+    /// Options given beside a difficulty mode that contradict the rules it fixes ([`crate::configure`]).
+    #[error(
+        "options contradict mode \"{mode}\", whose rules options are fixed ({fixed}): {}; drop them, or give no mode",
+        options.join(", ")
+    )]
+    ModeContradiction {
+        /// The mode's name (`"full-v0"`).
+        mode: &'static str,
+        /// What the mode fixes, in words (`"frame_skip=4, sticky_prob=0.25, the others at their defaults"`).
+        fixed: String,
+        /// Each contradicting option as `name value != fixed` (`"lives 2 != 3"`).
+        options: Vec<String>,
     },
 }
 

@@ -14,7 +14,8 @@
 //!   [`ChopperScape::step_into`] writes into a buffer the caller owns.
 //! - [`Snapshot`] clones and restores a whole environment, and encodes it to versioned bytes.
 //! - [`MODES`] is the ladder of difficulty modes (ChopperScape-Bench): named, versioned rule sets, each
-//!   applied to a [`Config`] with [`Mode::apply`].
+//!   applied to a [`Config`] with [`Mode::apply`]; [`configure`] builds a config from a mode and the options given
+//!   beside it, as every surface does.
 //! - [`policy`] holds the built-in policies: `random`, fixed actions, and the scripted `heuristic`.
 //!
 //! # Examples
@@ -62,7 +63,7 @@ pub use config::{
 pub use env::{ChopperScape, Env, Info, Step, Transition};
 pub use error::{ConfigError, Error, SnapshotError};
 pub use geometry::Rect;
-pub use modes::{MODES, Mode, mode, mode_names};
+pub use modes::{MODES, Mode, configure, mode, mode_names};
 pub use obs_buffer::{ObsBufMut, ObsData, Observation};
 pub use obs_pipeline::luma;
 pub use rng::Rng;

@@ -1,56 +1,15 @@
 //! Memory limits. Every buffer whose size comes from the user (observation size, frame stack, and in
-//! `chopperscape-vector` the number of environments) is sized and checked against a budget before anything is
-//! allocated, and allocated with `try_reserve`, so options that ask for too much are a typed error
-//! ([`ConfigError::TooLarge`], [`ConfigError::OutOfMemory`]) and never an abort, even under `ulimit -v`.
+//! `chopperscape-vector` the number of environments) is sized (an env's by [`crate::Config::env_bytes`]) and
+//! checked against a budget before anything is allocated, and allocated with `try_reserve`, so options that ask
+//! for too much are a typed error ([`ConfigError::TooLarge`], [`ConfigError::OutOfMemory`]) and never an abort,
+//! even under `ulimit -v`. Below the option table: the budgets and the checks, knowing nothing of options.
 
-use crate::config::{Config, ObsType};
 use crate::error::ConfigError;
-use crate::features::FEATURES_LEN;
+pub use crate::error::format_bytes;
 
 /// The most memory one environment's observation buffers may take: 4 GiB. (The largest observation within
 /// the options' ranges, `rgb_float` 4096 × 4096 stacked 64 deep, would take 24 GiB.)
 pub const MAX_ENV_BYTES: u64 = 4 << 30;
-
-/// Bytes of one observation (frame stack included): what a caller's buffer for it takes.
-pub fn observation_bytes(config: &Config) -> u64 {
-    let (single, elem) = single(config);
-    single * u64::from(config.frame_stack) * elem
-}
-
-/// Elements of one unstacked observation and bytes per element.
-fn single(config: &Config) -> (u64, u64) {
-    let (h, w) = (u64::from(config.obs_size.0), u64::from(config.obs_size.1));
-    match config.obs_type {
-        ObsType::Rgb => (h * w * 3, 1),
-        ObsType::RgbFloat => (h * w * 3, 4),
-        ObsType::Grayscale => (h * w, 1),
-        ObsType::Features => (FEATURES_LEN as u64, 4),
-    }
-}
-
-/// Bytes one environment's observation buffers take: the canvas it draws into, the frame stack and its
-/// scratch frame (`frame_stack > 1`), and one observation in the caller's buffer. Exact up to the renderer's
-/// sprites and HUD (a few hundred kilobytes at most). Cannot overflow within the options' ranges.
-pub fn env_bytes(config: &Config) -> u64 {
-    let (single, elem) = single(config);
-    // The canvas holds one byte per element of an unstacked observation (RGB or gray); features draw nothing.
-    let canvas = if config.obs_type.is_pixels() { single } else { 0 };
-    let observation = observation_bytes(config);
-    let stack = if config.frame_stack > 1 { observation + single * elem } else { 0 };
-    canvas + stack + observation
-}
-
-/// `n` bytes for people: `"12.0 GiB (12884901888 bytes)"`.
-pub fn format_bytes(n: u64) -> String {
-    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-    let mut v = n as f64;
-    let mut unit = 0;
-    while v >= 1024.0 && unit + 1 < UNITS.len() {
-        v /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 { format!("{n} bytes") } else { format!("{v:.1} {} ({n} bytes)", UNITS[unit]) }
-}
 
 /// Checks that `needed` bytes for `what` fit in `budget`.
 ///
@@ -91,18 +50,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_default_env_takes_two_rgb_frames() {
-        assert_eq!(env_bytes(&Config::default()), 2 * 600 * 800 * 3);
-        assert_eq!(env_bytes(&Config::features()), FEATURES_LEN as u64 * 4);
-    }
-
-    #[test]
-    fn the_largest_options_are_over_the_budget_and_say_by_how_much() {
-        let c = Config { obs_size: (4096, 4096), frame_stack: 64, obs_type: ObsType::RgbFloat, ..Config::default() };
-        assert_eq!(env_bytes(&c), 4096 * 4096 * 3 * (2 * 64 * 4 + 4 + 1));
-        assert!(env_bytes(&c) > MAX_ENV_BYTES);
+    fn sizes_are_said_in_units_and_bytes() {
         assert_eq!(format_bytes(12 << 30), "12.0 GiB (12884901888 bytes)");
         assert_eq!(format_bytes(100), "100 bytes");
+        let err = check_budget("a thing".into(), 5 << 30, MAX_ENV_BYTES, "make it smaller").unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "a thing would take 5.0 GiB (5368709120 bytes) of memory, over the budget of 4.0 GiB \
+                         (4294967296 bytes): make it smaller"
+        );
+        assert!(check_budget("a thing".into(), MAX_ENV_BYTES, MAX_ENV_BYTES, "").is_ok());
     }
 
     #[test]

@@ -10,8 +10,12 @@
 //! that contradicts a mode (an option given beside it with another value) is named by [`Mode::contradictions`].
 //! A change to a rung's options is a new mode (`sticky-v1`, …); an existing name never changes meaning.
 //!
+//! Every surface (the command line's `--mode` and flags, Python's `mode=` and keyword options, the page's mode
+//! menu and inputs) builds its config with [`configure`]: the mode first, then the options given beside it, then
+//! one error if any of them contradicts the mode.
+//!
 //! ```
-//! use chopperscape::{Config, mode};
+//! use chopperscape::{Config, ConfigError, configure, mode};
 //!
 //! let sticky = mode("sticky-v0").unwrap();
 //! let mut config = Config::features();
@@ -20,6 +24,18 @@
 //! assert!(sticky.contradictions(&config).is_empty());
 //! config.set("lives", "3").unwrap();
 //! assert_eq!(sticky.contradictions(&config), ["lives 3 != 1"]);
+//!
+//! let set = |options: &'static [(&'static str, &'static str)]| {
+//!     move |c: &mut Config| options.iter().try_for_each(|(name, value)| c.set(name, value))
+//! };
+//! let config = configure::<ConfigError>(Config::features(), Some(sticky), set(&[("hud", "false")])).unwrap();
+//! assert_eq!((config.frame_skip, config.hud), (4, false));
+//! let err = configure::<ConfigError>(Config::features(), Some(sticky), set(&[("lives", "3")])).unwrap_err();
+//! assert_eq!(
+//!     err.to_string(),
+//!     "options contradict mode \"sticky-v0\", whose rules options are fixed (frame_skip=4, sticky_prob=0.25, \
+//!      the others at their defaults): lives 3 != 1; drop them, or give no mode"
+//! );
 //! ```
 
 use crate::config::{Config, OPTIONS};
@@ -78,6 +94,28 @@ pub fn mode_names() -> String {
     MODES.iter().map(|m| m.name).collect::<Vec<_>>().join(", ")
 }
 
+/// A config built as every surface builds one: `mode` (if any) applied to `base` first, whatever the order the
+/// options were given in; then `set` sets the options given beside it, in whatever form the surface reads them
+/// (text flags, Python values, the page's inputs); then, with a mode, a rules option that contradicts it is
+/// refused with one error naming the mode, what it fixes and every such option.
+///
+/// # Errors
+/// What `set` returns, or [`ConfigError::ModeContradiction`] (through `E::from`).
+pub fn configure<E: From<ConfigError>>(
+    mut base: Config,
+    mode: Option<&Mode>,
+    set: impl FnOnce(&mut Config) -> Result<(), E>,
+) -> Result<Config, E> {
+    if let Some(mode) = mode {
+        mode.apply(&mut base)?;
+    }
+    set(&mut base)?;
+    if let Some(mode) = mode {
+        mode.check(&base)?;
+    }
+    Ok(base)
+}
+
 /// The rules options a mode fixes: every rules option but `max_episode_steps` (the protocol's step limit).
 fn fixed_names() -> impl Iterator<Item = &'static str> {
     OPTIONS.iter().filter(|o| o.rule && o.name != "max_episode_steps").map(|o| o.name)
@@ -112,6 +150,28 @@ impl Mode {
         let mut config = Config::default();
         self.apply(&mut config)?;
         Ok(config)
+    }
+
+    /// What this mode fixes, in words: `"frame_skip=4, sticky_prob=0.25, the others at their defaults"`, or
+    /// `"every rules option at its default"` for `v0`.
+    pub fn fixed(&self) -> String {
+        if self.options.is_empty() {
+            return "every rules option at its default".into();
+        }
+        let set: Vec<String> = self.options.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        format!("{}, the others at their defaults", set.join(", "))
+    }
+
+    /// Checks that `config` plays this mode.
+    ///
+    /// # Errors
+    /// [`ConfigError::ModeContradiction`] naming this mode, what it fixes and each of [`Mode::contradictions`].
+    pub fn check(&self, config: &Config) -> Result<(), ConfigError> {
+        let options = self.contradictions(config);
+        if options.is_empty() {
+            return Ok(());
+        }
+        Err(ConfigError::ModeContradiction { mode: self.name, fixed: self.fixed(), options })
     }
 
     /// The rules options of `config` that differ from this mode's, each as `name value != fixed` (values as
@@ -162,6 +222,37 @@ mod tests {
         assert_eq!((c.lives, c.frame_skip, c.frame_stack, c.max_episode_steps), (3, 4, 4, None));
         mode("v0").unwrap().apply(&mut c).unwrap();
         assert_eq!((c.lives, c.frame_skip, c.alien_prob), (1, 1, 0.0));
+    }
+
+    #[test]
+    fn configure_applies_the_mode_first_and_refuses_contradictions_in_one_error() {
+        let full = mode("full-v0").unwrap();
+        let given = |options: Vec<(&'static str, &'static str)>| {
+            move |c: &mut Config| options.iter().try_for_each(|(n, v)| c.set(n, v))
+        };
+        // No mode: the options alone, on the base.
+        let plain = configure::<ConfigError>(Config::features(), None, given(vec![("lives", "7")])).unwrap();
+        assert_eq!((plain.lives, plain.obs_type), (7, crate::ObsType::Features));
+        // The mode's rules, then options that agree with it or that it leaves free.
+        let free = given(vec![("lives", "3"), ("max_episode_steps", "50"), ("frame_stack", "2")]);
+        let c = configure::<ConfigError>(Config::features(), Some(full), free).unwrap();
+        assert_eq!((c.lives, c.frame_skip, c.max_episode_steps, c.frame_stack), (3, 4, Some(50), 2));
+        // Every contradiction in one error, naming the mode and what it fixes.
+        let clash = given(vec![("lives", "7"), ("frame_skip", "2")]);
+        let err = configure::<ConfigError>(Config::features(), Some(full), clash).unwrap_err();
+        assert_eq!(
+            err,
+            ConfigError::ModeContradiction {
+                mode: "full-v0",
+                fixed: full.fixed(),
+                options: vec!["lives 7 != 3".into(), "frame_skip 2 != 4".into()]
+            }
+        );
+        assert!(err.to_string().starts_with("options contradict mode \"full-v0\", whose rules options are fixed"));
+        // The setter's own error comes through unchanged.
+        let bad = configure::<ConfigError>(Config::features(), Some(full), given(vec![("lives", "0")])).unwrap_err();
+        assert!(matches!(bad, ConfigError::OutOfRange { option: "lives", .. }), "{bad}");
+        assert_eq!(mode("v0").unwrap().fixed(), "every rules option at its default");
     }
 
     #[test]

@@ -230,7 +230,7 @@ impl Policy {
             meta.check_versions()?;
             // The env options must make the observation the graph takes.
             let config = meta.config()?;
-            let elements = chopperscape::limits::observation_bytes(&config)
+            let elements = config.observation_bytes()
                 / match dtype_of(config.obs_type) {
                     Dtype::U8 => 1,
                     Dtype::F32 => 4,

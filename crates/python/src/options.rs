@@ -1,7 +1,7 @@
 //! Keyword options (a Python dict) to a [`Config`], through [`Config::set`] so the rules for every value
 //! live in the core.
 
-use chopperscape::{Config, OptionKind, OptionValue, option_info};
+use chopperscape::{Config, ConfigError, OptionKind, OptionValue, option_info};
 use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -13,47 +13,52 @@ use crate::errors::config_error;
 /// (`obs_size=(84, 84)` or any sequence of two ints, `hud=False` (bools only, numpy's included), `lives=3`,
 /// `alien_prob=0.02`, `max_episode_steps=None`) or the textual forms [`Config::set`] reads (not for `hud`).
 ///
-/// # Errors
-/// `ValueError` naming the first unknown option or value out of range.
-///
 /// `mode` (a name of [`chopperscape::MODES`], or `None` for none) is applied first, whatever its place in the dict;
-/// the other options go on top, and one that contradicts the mode's fixed rules is refused, naming the mode.
+/// the other options go on top, and one that contradicts the mode's fixed rules is refused, naming the mode (the
+/// core's [`chopperscape::configure`], as the command line and the page build theirs).
+///
+/// # Errors
+/// `ValueError` naming the first unknown option or value out of range, or the options that contradict the mode.
 pub(crate) fn config_from(options: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
-    let mut config = Config::default();
-    let Some(options) = options else { return Ok(config) };
+    let Some(options) = options else { return Ok(Config::default()) };
     let mode = match options.get_item("mode")? {
         Some(value) if !value.is_none() => Some(mode_of(&value)?),
         _ => None,
     };
-    if let Some(mode) = mode {
-        mode.apply(&mut config).map_err(config_error)?;
-    }
-    for (name, value) in options.iter() {
-        let name: String =
-            name.extract().map_err(|_| PyValueError::new_err(format!("option names must be strings, got {name:?}")))?;
-        if name == "mode" {
-            continue;
+    let set = |config: &mut Config| -> Result<(), OptionError> {
+        for (name, value) in options.iter() {
+            let name: String = name
+                .extract()
+                .map_err(|_| PyValueError::new_err(format!("option names must be strings, got {name:?}")))?;
+            if name == "mode" {
+                continue;
+            }
+            let kind = option_info(&name).map(|o| o.kind);
+            if kind == Some(OptionKind::Size) && !value.is_instance_of::<PyString>() {
+                set_size(config, &name, &value)?;
+                continue;
+            }
+            let text = option_text(&name, kind, &value)?;
+            config.set(&name, &text)?;
         }
-        let kind = option_info(&name).map(|o| o.kind);
-        if kind == Some(OptionKind::Size) && !value.is_instance_of::<PyString>() {
-            set_size(&mut config, &name, &value)?;
-            continue;
-        }
-        let text = option_text(&name, kind, &value)?;
-        config.set(&name, &text).map_err(config_error)?;
+        Ok(())
+    };
+    chopperscape::configure(Config::default(), mode, set).map_err(|OptionError(e)| e)
+}
+
+/// A Python exception on its way out of [`chopperscape::configure`], which raises the core's errors through `From`.
+struct OptionError(PyErr);
+
+impl From<PyErr> for OptionError {
+    fn from(e: PyErr) -> Self {
+        OptionError(e)
     }
-    if let Some(mode) = mode {
-        let wrong = mode.contradictions(&config);
-        if !wrong.is_empty() {
-            return Err(PyValueError::new_err(format!(
-                "options contradict mode {:?}, whose rules options are fixed ({}): {}; drop them, or give no mode",
-                mode.name,
-                fixed_text(mode),
-                wrong.join(", ")
-            )));
-        }
+}
+
+impl From<ConfigError> for OptionError {
+    fn from(e: ConfigError) -> Self {
+        OptionError(config_error(e))
     }
-    Ok(config)
 }
 
 /// The mode named by a Python value: a string of [`chopperscape::MODES`].
@@ -66,15 +71,6 @@ fn mode_of(value: &Bound<'_, PyAny>) -> PyResult<&'static chopperscape::Mode> {
             chopperscape::mode_names()
         ))
     })
-}
-
-/// A mode's options as `name=value, ...` (`v0 defaults` when it sets none).
-fn fixed_text(mode: &chopperscape::Mode) -> String {
-    if mode.options.is_empty() {
-        return "every rules option at its default".into();
-    }
-    let set: Vec<String> = mode.options.iter().map(|(n, v)| format!("{n}={v}")).collect();
-    format!("{}, the others at their defaults", set.join(", "))
 }
 
 /// `_core.MODES`: the difficulty modes ([`chopperscape::MODES`]), easiest first, each a dict with `name`, `id`

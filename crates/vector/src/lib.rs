@@ -32,7 +32,7 @@ mod pool;
 pub use buffers::{BatchMut, Buffers, CAUSE_BIRD, CAUSE_FUEL, CAUSE_NAMES, CAUSE_NONE, Observations, cause_code};
 pub use error::BatchError;
 
-use chopperscape::limits::{check_budget, env_bytes, observation_bytes, probe};
+use chopperscape::limits::{check_budget, probe};
 use chopperscape::{BoxSpace, ChopperScape, Config, ConfigError, Env, N_ACTIONS, ObsBufMut, SnapshotError, Status};
 
 use crate::pool::LazyPool;
@@ -147,14 +147,14 @@ impl VectorEnv {
     }
 
     /// Bytes a batch of `num_envs` environments with these options takes: each environment (its state and
-    /// observation buffers, [`chopperscape::limits::env_bytes`]) and its share of the output buffers (one
+    /// observation buffers, [`Config::env_bytes`]) and its share of the output buffers (one
     /// observation, two with `SameStep`'s final observations, and the scalars). Saturates instead of overflowing.
     pub fn batch_bytes(config: &Config, num_envs: usize, mode: AutoresetMode) -> u64 {
-        let obs = observation_bytes(config);
+        let obs = config.observation_bytes();
         let finals = if mode == AutoresetMode::SameStep { obs } else { 0 };
         // Rewards, flags, fuel, lives and cause, and the wider copies Python hands out.
         let scalars = 64;
-        let per_env = std::mem::size_of::<Slot>() as u64 + env_bytes(config) + obs + finals + scalars;
+        let per_env = std::mem::size_of::<Slot>() as u64 + config.env_bytes() + obs + finals + scalars;
         per_env.saturating_mul(num_envs as u64)
     }
 

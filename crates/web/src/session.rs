@@ -4,7 +4,9 @@
 //! Nothing here touches JavaScript, so it is tested natively; `lib.rs` only maps it to `wasm-bindgen`.
 
 use chopperscape::policy::{self, Policy};
-use chopperscape::{Action, ChopperScape, Config, Env, OPTIONS, ObsType, Observation, Status, Transition, World};
+use chopperscape::{
+    Action, ChopperScape, Config, ConfigError, Env, OPTIONS, ObsType, Observation, Status, Transition, World,
+};
 
 /// Height of the frame the page shows, in pixels.
 pub const FRAME_HEIGHT: usize = chopperscape::consts::HEIGHT as usize;
@@ -15,6 +17,20 @@ pub const FRAME_WIDTH: usize = chopperscape::consts::WIDTH as usize;
 /// options that change play, in table order. Observation settings are the page's own business (it always shows the
 /// full frame), so they are refused.
 pub const PAGE_OPTIONS: &[&str] = &page_options::<{ page_count() }>();
+
+/// Every name the page takes: `mode`, then [`PAGE_OPTIONS`] (what the error for another name lists).
+const PAGE_NAMES: &[&str] = &page_names::<{ page_count() + 1 }>();
+
+/// `mode` and the page's options, in that order.
+const fn page_names<const N: usize>() -> [&'static str; N] {
+    let mut names = ["mode"; N];
+    let mut i = 0;
+    while i < PAGE_OPTIONS.len() {
+        names[i + 1] = PAGE_OPTIONS[i];
+        i += 1;
+    }
+    names
+}
 
 /// How many options of the core's table the page sets.
 const fn page_count() -> usize {
@@ -79,42 +95,31 @@ impl Session {
     }
 
     fn build<'a>(
-        mut config: Config,
+        config: Config,
         options: impl IntoIterator<Item = (&'a str, &'a str)>,
         agent: Option<chopperscape_policy::Policy>,
     ) -> Result<Session, String> {
         // `mode` (a name of chopperscape::MODES, as `--mode` and Python's `mode=` take it) is applied first,
-        // wherever it stands; the other options go on top and may not contradict it.
+        // wherever it stands; the other options go on top and may not contradict it (the core's `configure`).
         let options: Vec<(&str, &str)> = options.into_iter().collect();
         let mut mode = None;
         for &(name, value) in &options {
             if name == "mode" && !value.is_empty() {
-                let m = chopperscape::mode(value).ok_or_else(|| {
+                mode = Some(chopperscape::mode(value).ok_or_else(|| {
                     format!("invalid value {value:?} for `mode`: allowed {}", chopperscape::mode_names())
-                })?;
-                m.apply(&mut config).map_err(|e| e.to_string())?;
-                mode = Some(m);
+                })?);
             }
         }
-        for (name, value) in options {
-            if name == "mode" {
-                continue;
+        let set = |config: &mut Config| {
+            for &(name, value) in options.iter().filter(|(name, _)| *name != "mode") {
+                if !PAGE_OPTIONS.contains(&name) {
+                    return Err(ConfigError::Unknown { name: name.to_string(), allowed: PAGE_NAMES });
+                }
+                config.set(name, value)?;
             }
-            if !PAGE_OPTIONS.contains(&name) {
-                return Err(format!("unknown option `{name}`: allowed options are mode, {}", PAGE_OPTIONS.join(", ")));
-            }
-            config.set(name, value).map_err(|e| e.to_string())?;
-        }
-        if let Some(m) = mode {
-            let wrong = m.contradictions(&config);
-            if !wrong.is_empty() {
-                return Err(format!(
-                    "options contradict mode {}, whose rules options are fixed: {}",
-                    m.name,
-                    wrong.join(", ")
-                ));
-            }
-        }
+            Ok(())
+        };
+        let config = chopperscape::configure(config, mode, set).map_err(|e| e.to_string())?;
         if let Some(agent) = &agent {
             agent.check(&config).map_err(|e| e.to_string())?;
         }
@@ -296,7 +301,7 @@ mod tests {
         let err = Session::new([("mode", "hard-v9")]).err().unwrap();
         assert!(err.contains("hard-v9") && err.contains("sticky-v0"), "{err}");
         let err = Session::new([("lives", "7"), ("mode", "full-v0")]).err().unwrap();
-        assert!(err.contains("contradict mode full-v0") && err.contains("lives"), "{err}");
+        assert!(err.contains("contradict mode \"full-v0\"") && err.contains("lives 7 != 3"), "{err}");
         assert!(Session::new([("mode", "v0"), ("lives", "1")]).is_ok());
     }
 

@@ -1,6 +1,6 @@
 """How the fast preset's figures were measured: train one recipe per training seed (``--preset fast`` with optional
 overrides), evaluate it greedily on the 100 held-out seeds from 1,000,000, and append a CSV row with the training's
-wall and CPU time. The same runs as ``python -m chopperscape.learn.train --seeds ... --preset fast`` (the runs are
+wall and CPU time. The same runs as ``python -m chopperscape.learn.seeds --seeds ... --preset fast`` (the runs are
 deterministic: the same seed gives the same model), in one process so that the CPU time is the training's own.
 
     python docs/curves/fast-probes/measure.py OUT.csv 0,1,2 [--set '{"update_epochs": 4, "learning_rate": 5e-4}']
@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from chopperscape.learn import train
-from chopperscape.learn.evaluate import load_recipe, play_episodes
+from chopperscape.learn.episodes import play_episodes
+from chopperscape.learn.players import load_recipe
 from chopperscape.learn.recipe import PRESETS, Recipe
 
 

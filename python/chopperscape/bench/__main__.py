@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from .._cli import ENV_OPTIONS, parse_options, print_line
+from .._cli import ENV_OPTIONS, parse_options, print_line, run_command
 from . import evaluate, protocol, report, results
 
 
@@ -36,7 +36,8 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--json", action="store_true", help="print the rows as JSON instead of a Markdown table")
     r.add_argument("--resamples", type=int, default=report.RESAMPLES, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
-    try:
+
+    def command() -> int:
         if a.command == "modes":
             return print_line(json.dumps({"modes": protocol.MODES, "protocol": protocol.PROTOCOL}, indent=2))
         if a.command == "evaluate":
@@ -62,12 +63,8 @@ def main(argv: list[str] | None = None) -> int:
         if a.plots:
             report.plot(docs, rows, Path(a.plots), a.format, a.pool_modes)
         return print_line(json.dumps(rows, indent=2) if a.json else report.markdown(rows).rstrip("\n"))
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except OSError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 1
+
+    return run_command(command)
 
 
 if __name__ == "__main__":

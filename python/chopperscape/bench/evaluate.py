@@ -104,14 +104,14 @@ def load(
     if path.suffix == ".onnx":
         return _onnx(path, options, rules, stochastic, run, info)
     _need("torch", f"policy file {policy!r}")
-    from ..learn import evaluate as learn_eval
+    from ..learn import players
 
     if path.suffix == ".zip":
         _need("stable_baselines3", f"policy file {policy!r}")
         import torch
 
         torch.manual_seed(run)
-        act, played = learn_eval.load_sb3(path, stochastic, {**options, **rules}, trust_pickle)
+        act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle)
         info["kind"] = "sb3"
         return Loaded(act, played, info)
     from ..learn.model import load as load_model
@@ -122,7 +122,7 @@ def load(
     if isinstance(seed, int) and isinstance(num_envs, int):
         protocol.check_training_seeds(seed, num_envs, f"policy file {policy!r}: its training")
         info["train_seeds"] = [seed, num_envs]
-    act, played = learn_eval.load_recipe(path, stochastic, run, {**options, **rules})
+    act, played = players.load_recipe(path, stochastic, run, {**options, **rules})
     return Loaded(act, played, info)
 
 
@@ -195,7 +195,7 @@ def run(
     """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
     (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
     `.zip`, a callable): they are checked against the evaluation seeds and recorded."""
-    from ..learn.evaluate import play_episodes
+    from ..learn.episodes import play_episodes
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
         raise ValueError(f"--policy-seed {policy_seed!r}: allowed 0 <= seed < 2**31")

@@ -30,7 +30,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import MODES
-from ..learn.seeds import iqm
+from ..learn.stats import iqm
 from . import protocol
 from .results import load
 

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .. import _atomic
-from .._cli import print_line
+from .._cli import print_line, run_command
 
 #: The format written into `metadata_props["format"]` (the Rust crate reads this one).
 FORMAT = "chopperscape-policy/1"
@@ -60,7 +60,7 @@ OPSET = 17
 def load(path: Path):
     """`(payload, agent, norm, env_options, env_shape)` of a recipe model; `ValueError` with one line for a
     missing file, one that is not a recipe model, or one that holds more than tensors and plain data."""
-    from .evaluate import observation_shape
+    from .episodes import observation_shape
     from .model import from_payload, read_checkpoint
 
     what = f"model file {str(path)!r}"
@@ -237,23 +237,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     p.add_argument("--no-check", action="store_true", help="skip comparing the export's logits with torch's")
     a = p.parse_args(argv)
+    return run_command(lambda: print_line(json.dumps(_export(a))))
+
+
+def _export(a: argparse.Namespace) -> dict[str, Any]:
+    """What `main` does with its flags `a`: the export's result line as a dict."""
     try:
         import onnx  # noqa: F401
         import torch
 
         torch.set_num_threads(1)
     except ImportError as err:
-        print(f"error: exporting needs torch and onnx: pip install torch onnx ({err})", file=sys.stderr)
-        return 2
-    try:
-        result = export(Path(a.model), Path(a.out), a.force, check=not a.no_check)
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except (RuntimeError, OSError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 1
-    return print_line(json.dumps(result))
+        raise ImportError(f"exporting needs torch and onnx: pip install torch onnx ({err})") from None
+    return export(Path(a.model), Path(a.out), a.force, check=not a.no_check)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from .. import _atomic
+from .._cli import cannot, run_command
 from .progress import read
 
 
@@ -34,25 +35,25 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--title", default="ChopperScape-v0: mean return of the last 100 episodes")
     a = p.parse_args(argv)
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("error: the plot needs matplotlib: pip install matplotlib", file=sys.stderr)
-        return 2
     if a.label and len(a.label) != len(a.csv):
         p.error(f"{len(a.label)} --label for {len(a.csv)} CSV files: give one per file or none")
     if a.frame_skip and len(a.frame_skip) != len(a.csv):
         p.error(f"{len(a.frame_skip)} --frame-skip for {len(a.csv)} CSV files: give one per file or none")
     if any(k < 1 for k in a.frame_skip):
         p.error(f"invalid --frame-skip {min(a.frame_skip)}: allowed an integer ≥ 1")
+    return run_command(lambda: draw(a))
+
+
+def draw(a: argparse.Namespace) -> int:
+    """What `main` does with its checked flags `a`: reads every CSV, draws them into `a.out`, prints its path; 0."""
     try:
-        runs = [read(path) for path in a.csv]
-    except (OSError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise ImportError("the plot needs matplotlib: pip install matplotlib") from None
+    runs = [read(path) for path in a.csv]
     labels = a.label or [path.parent.name or path.stem for path in a.csv]
     fig, (ax_steps, ax_time) = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     if len(runs) > 10:  # past the default cycle's 10 colours: tab20's, its 10 strong ones first
@@ -91,12 +92,12 @@ def main(argv: list[str] | None = None) -> int:
     fig.suptitle(a.title)
     fig.tight_layout()
     try:
-        a.out.parent.mkdir(parents=True, exist_ok=True)
-        with _atomic.replacing(a.out) as tmp:
-            fig.savefig(tmp, dpi=110, format=a.out.suffix.lstrip(".").lower() or "png")
-    except (OSError, ValueError) as err:  # an unwritable folder, a full disk, a format matplotlib lacks
-        print(f"error: cannot write {a.out}: {getattr(err, 'strerror', None) or err}", file=sys.stderr)
-        return 2 if isinstance(err, ValueError) else 1
+        with cannot(f"write {a.out}"):  # an unwritable folder, a full disk
+            a.out.parent.mkdir(parents=True, exist_ok=True)
+            with _atomic.replacing(a.out) as tmp:
+                fig.savefig(tmp, dpi=110, format=a.out.suffix.lstrip(".").lower() or "png")
+    except ValueError as err:  # a format matplotlib lacks
+        raise ValueError(f"cannot write {a.out}: {err}") from None
     print(a.out)
     return 0
 

@@ -26,14 +26,13 @@ written (a read-only folder, a full disk) ends the run with one line naming it (
 checked before anything is written; a loss that is not finite stops the run before the optimiser step, so the saved
 model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
 reached so far atomically, and exits with 130, 143, 129.
-``--seeds 0-9`` trains several seeds and reports them as the field does (see :mod:`chopperscape.learn.seeds`).
+Several seeds, each evaluated and all summarised as the field does: ``python -m chopperscape.learn.seeds``.
 Pixel recipes learn here with a features teacher: ``--preset pixels --teacher models/ppo-features-fs4.pt`` (see
 :class:`chopperscape.learn.recipe.Recipe`, ``teacher``, and ``docs/learning.md``).
 """
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import json
 import math
@@ -48,26 +47,21 @@ from pathlib import Path
 import numpy as np
 
 from .. import _atomic, _signals
-from .._cli import ENV_OPTIONS, env_options, print_line
+from .._cli import print_line, run_command
 from ..vector import VectorEnv
-from . import progress
+from . import flags, progress
 from .guidance import Guidance, env_state, load_teacher, set_env_state
 from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, random_shift, save, shift_pad
 from .phases import OFF, Phases
 from .recipe import (
-    DEFAULT_STEPS,
     MAX_PARAMETERS,
     MAX_ROLLOUT_BYTES,
-    PRESETS,
-    RECIPE_FLAGS,
-    RESERVED_OPTIONS,
     RUN_FILES,
     Recipe,
     check_minutes,
     check_recipe,
     check_run_folder,
     network_of,
-    read_recipe,
 )
 
 try:
@@ -493,149 +487,17 @@ def train(
     return model_path
 
 
-def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
-    """The command line's flags and the recipe they make, every setting checked (exit 2 through argparse, naming
-    the setting): what `main` trains, and what the seed runner checks before it trains any seed."""
-    p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=__doc__.splitlines()[0])
-    p.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help="folder for progress.csv, model.pt, recipe.json, resume.pt (with --seeds: one sub-folder per seed)",
-    )
-    p.add_argument(
-        "--resume",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="continue the run in DIR from its last checkpoint (resume.pt, saved every 50 updates and when a run "
-        "stops), with the recipe of its recipe.json: the curve goes on as the uninterrupted run's; only --minutes "
-        "may be given with it",
-    )
-    p.add_argument(
-        "--steps",
-        type=int,
-        default=None,
-        help=f"env-step budget; the learning rate anneals over it (default the preset's, else {DEFAULT_STEPS:,})",
-    )
-    p.add_argument(
-        "--minutes",
-        type=float,
-        default=None,
-        help="stop after this much wall time (only stops: the schedule still follows --steps)",
-    )
-    p.add_argument(
-        "--seeds",
-        default=None,
-        metavar="LIST",
-        help="train these seeds (e.g. 0-9 or 0,3,5), evaluate each on held-out seeds and write a summary "
-        "(runs python -m chopperscape.learn.seeds, which documents its own flags: --jobs, --eval-episodes, ...)",
-    )
-    p.add_argument(
-        "--option",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="an env option, e.g. --option frame_skip=4 (JSON values)",
-    )
-    p.add_argument(
-        "--preset",
-        choices=sorted(PRESETS),
-        default=None,
-        help="recipe preset: features (the default), fast (features at frame skip 4, learning in minutes), pixels "
-        "(grayscale frames, a CNN) or pixels-large (the same with 256 envs, for --device cuda); flags override it",
-    )
-    defaults = Recipe()
-    for f in RECIPE_FLAGS:
-        p.add_argument(
-            f"--{f.replace('_', '-')}",
-            type=type(getattr(defaults, f)),
-            default=None,
-            help=f"default {getattr(defaults, f)!r} (or the preset's)",
-        )
-    p.add_argument("--no-norm-obs", action="store_true")
-    p.add_argument("--no-norm-reward", action="store_true")
-    p.add_argument(
-        "--no-invert-frames",
-        action="store_true",
-        help="CNN recipes: read frames as frame / 255 (chopperscape 0.1.0), not 1 - frame / 255",
-    )
-    p.add_argument(
-        "--force",
-        action="store_true",
-        help="start over in an --out folder that already holds a run (that run is first moved into OUT/replaced-N)",
-    )
-    a = p.parse_args(args)
-    if a.resume is not None:
-        flags = [f"--{f.replace('_', '-')}" for f in RECIPE_FLAGS if getattr(a, f) is not None]
-        others = {"--steps": a.steps, "--preset": a.preset, "--seeds": a.seeds, "--option": a.option or None}
-        flags += [k for k, v in others.items() if v is not None]
-        flags += [
-            k
-            for k in ("--no-norm-obs", "--no-norm-reward", "--no-invert-frames", "--force")
-            if getattr(a, k[2:].replace("-", "_"))
-        ]
-        if a.out is not None and a.out != a.resume:
-            flags.append("--out")
-        if flags:
-            p.error(f"--resume continues the run with its own recipe.json: {', '.join(flags)} cannot be given with it")
-        a.out = a.resume
-        try:
-            recipe = read_recipe(a.resume / "recipe.json")
-            check_minutes(a.minutes)
-        except ValueError as e:
-            p.error(f"--resume {a.resume}: {e}")
-        return a, recipe
-    if a.out is None:
-        p.error("the following arguments are required: --out (or --resume DIR)")
-    a.preset = a.preset or "features"
-    preset = dict(PRESETS[a.preset])
-    steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
-    preset.pop("total_steps", None)
-    allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
-    options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
-    settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
-    settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
-    recipe = Recipe(
-        **settings,
-        env_options=options,
-        norm_obs=not a.no_norm_obs,
-        norm_reward=not a.no_norm_reward,
-        invert_frames=not a.no_invert_frames,
-        total_steps=steps,
-    )
-    try:
-        check_recipe(recipe)
-        check_minutes(a.minutes)
-        check_run_folder(a.out, a.force)
-    except ValueError as e:
-        p.error(str(e))
-    return a, recipe
-
-
 def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    if any(x == "--seeds" or x.startswith("--seeds=") for x in args):
-        # Several seeds, evaluated and summarised: the runner takes its own flags and passes the rest back here.
-        from . import seeds
+    a, recipe = flags.parse(sys.argv[1:] if argv is None else argv)
 
-        return seeds.main(args)
-    a, recipe = parse(args)
-    try:
-        path = train(recipe, a.out, a.minutes, force=a.force, resume=a.resume is not None)
-    except ValueError as e:  # an env option the env refuses
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    except (FloatingPointError, RuntimeError) as e:  # a loss that is not finite, a twin env out of step
-        print(f"error: training stopped: {e}; the model saved last is kept", file=sys.stderr)
-        return 1
-    except RunWriteError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 1
-    except _signals.Interrupted as e:
-        print(e, file=sys.stderr)
-        return e.exit_code
-    return print_line(json.dumps({"model": str(path), "progress": str(a.out / "progress.csv")}))
+    def command() -> int:
+        try:
+            path = train(recipe, a.out, a.minutes, force=a.force, resume=a.resume is not None)
+        except (FloatingPointError, RuntimeError) as e:  # a loss that is not finite, a twin env out of step
+            raise RuntimeError(f"training stopped: {e}; the model saved last is kept") from None
+        return print_line(json.dumps({"model": str(path), "progress": str(a.out / "progress.csv")}))
+
+    return run_command(command)
 
 
 if __name__ == "__main__":

@@ -139,7 +139,7 @@ fn exit_status(status: ExitStatus) -> u8 {
 /// Fails with what to install when `python` cannot import the package and Minari.
 fn check_python(python: &str) -> Result<()> {
     let probe = Command::new(python)
-        .args(["-c", "import chopperscape.integrations.datasets as d; d._minari()"])
+        .args(["-c", "from chopperscape.integrations.datasets.place import minari_modules; minari_modules()"])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .output();

@@ -1,0 +1,99 @@
+"""The recipe's networks (`chopperscape.learn.model`): what observations each takes, the CNN's shared trunk, and the
+frames it reads (inverted since 0.2; 0.1.0's checkpoints keep plain frames)."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import needs_torch
+
+
+def test_networks_refuse_observations_they_cannot_take():
+    pytest.importorskip("torch")
+    from chopperscape.learn import model
+
+    with pytest.raises(ValueError, match="mlp network takes vector observations"):
+        model.build_agent("mlp", (84, 84, 4))
+    with pytest.raises(ValueError, match="takes grayscale frames"):
+        model.build_agent("small", (46,))
+    with pytest.raises(ValueError, match="too small"):
+        model.build_agent("nature", (16, 16, 4))
+    with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature'"):
+        model.build_agent("resnet", (84, 84, 4))
+
+
+@needs_torch
+@pytest.mark.parametrize("network, shape", [("small", (84, 84, 4)), ("small", (42, 42, 4)), ("nature", (84, 84))])
+def test_cnn_act_runs_the_trunk_once_and_matches_both_heads(network, shape):
+    """`CnnAgent.act` shares one trunk pass between the heads (half the convolutions of calling `actor` and
+    `critic`); its log-probabilities, entropy, value and gradients are those of the two heads called apart."""
+    import torch
+
+    from chopperscape.learn import model
+
+    torch.manual_seed(0)
+    agent = model.build_agent(network, shape)
+    x = torch.randint(0, 256, (6, *shape), dtype=torch.uint8)
+    actions = torch.tensor([0, 1, 2, 3, 4, 0])
+    trunk = agent.actor[0]
+    calls = []
+    hook = trunk.register_forward_hook(lambda *_: calls.append(1))
+    _, logp, ent, value = agent.act(x, actions)
+    hook.remove()
+    assert len(calls) == 1
+    dist = torch.distributions.Categorical(logits=agent.actor(x))
+    torch.testing.assert_close(logp, dist.log_prob(actions), rtol=0, atol=1e-6)
+    torch.testing.assert_close(ent, dist.entropy(), rtol=0, atol=1e-6)
+    torch.testing.assert_close(value, agent.value(x), rtol=0, atol=1e-6)
+    # The same gradients as the loss built from the separate heads.
+    (logp.sum() + value.sum()).backward()
+    shared = [p.grad.clone() for p in agent.parameters()]
+    agent.zero_grad()
+    (dist.log_prob(actions).sum() + agent.value(x).sum()).backward()
+    for got, want in zip(shared, (p.grad for p in agent.parameters())):
+        torch.testing.assert_close(got, want, rtol=1e-5, atol=1e-6)
+    # Frames: uint8 and float frames in 0..255 give the same numbers, and a float input is not changed in place.
+    xf = x.float()
+    before = xf.clone()
+    torch.testing.assert_close(agent.act(xf, actions)[1], logp.detach(), rtol=0, atol=1e-6)
+    assert torch.equal(xf, before)
+
+
+@needs_torch
+def test_cnn_reads_inverted_frames_and_old_models_keep_plain_ones(tmp_path):
+    """Recipe CNNs read ``1 - frame / 255`` (the white sky as 0); a 0.1.0 checkpoint, whose recipe has no
+    `invert_frames`, is rebuilt reading ``frame / 255`` and gives the logits it was saved with."""
+    import torch
+
+    from chopperscape.learn import model
+    from chopperscape.learn.recipe import Recipe
+
+    x = torch.tensor([[[0, 51], [255, 204]]], dtype=torch.uint8)
+    torch.testing.assert_close(model.Frames(invert=True)(x), 1 - x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    torch.testing.assert_close(model.Frames()(x), x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    assert Recipe().invert_frames is True
+    shape = (42, 42, 2)
+    frames = torch.randint(0, 256, (5, *shape), dtype=torch.uint8)
+    for invert in (True, False):
+        torch.manual_seed(3)
+        agent = model.build_agent("small", shape, invert_frames=invert)
+        recipe = Recipe(obs_type="grayscale", network="small", invert_frames=invert)
+        path = tmp_path / f"invert-{invert}.pt"
+        model.save(path, agent, model.ObsNormalizer(shape, False), recipe, shape, 0)
+        if not invert:  # as 0.1.0 wrote it: no such key
+            payload = torch.load(path, weights_only=True)
+            del payload["recipe"]["invert_frames"]
+            torch.save(payload, path)
+        loaded = model.load(path).agent
+        assert cast_frames(loaded).invert is invert
+        torch.testing.assert_close(loaded.actor(frames), agent.actor(frames), rtol=0, atol=0)
+    # The two readings are different inputs: the same weights give other logits.
+    torch.manual_seed(3)
+    plain = model.build_agent("small", shape)
+    torch.manual_seed(3)
+    inverted = model.build_agent("small", shape, invert_frames=True)
+    assert not torch.allclose(plain.actor(frames), inverted.actor(frames))
+
+
+def cast_frames(agent):
+    """The `Frames` layer at the front of a CNN agent's trunk."""
+    return agent.actor[0][0]

@@ -1,0 +1,91 @@
+"""The SB3 adapter (`chopperscape.integrations.sb3`): trajectory for trajectory equal to SB3's own `make_vec_env`,
+truncation as SB3 reports it, PPO learning through it and reloading, the CNN policy on grayscale frames. (Its
+contract under hostile input: `test_sb3_contract.py`.)"""
+
+from __future__ import annotations
+
+import numpy as np
+from conftest import SHORT, needs_sb3
+
+
+@needs_sb3
+def test_sb3_adapter_equals_make_vec_env_trajectory_for_trajectory():
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    options = dict(SHORT, lives=2)
+    ref = make_vec_env("ChopperScape-v0", n_envs=3, seed=11, env_kwargs=options)
+    ours = ChopperScapeVecEnv(3, seed=11, **options)
+    assert ours.observation_space == ref.observation_space and ours.action_space == ref.action_space
+    assert np.array_equal(ref.reset(), ours.reset())
+    rng = np.random.default_rng(1)
+    ended = 0
+    for t in range(600):
+        actions = rng.integers(0, 5, 3)
+        o1, r1, d1, i1 = ref.step(actions)
+        o2, r2, d2, i2 = ours.step(actions)
+        assert np.array_equal(o1, o2) and np.array_equal(r1, r2) and np.array_equal(d1, d2), t
+        for a, b in zip(i1, i2):
+            for key in ("TimeLimit.truncated", "fuel", "lives", "cause"):
+                assert a.get(key) == b.get(key), (t, key)
+            assert ("terminal_observation" in a) == ("terminal_observation" in b)
+            if "terminal_observation" in a:
+                ended += 1
+                assert np.array_equal(a["terminal_observation"], b["terminal_observation"])
+                assert (a["episode"]["r"], a["episode"]["l"]) == (b["episode"]["r"], b["episode"]["l"])
+    assert ended > 20
+
+
+@needs_sb3
+def test_sb3_adapter_reports_truncation_as_sb3_does():
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    env = ChopperScapeVecEnv(2, seed=0, obs_type="features", bird_prob=0.0, max_episode_steps=5)
+    env.reset()
+    for _ in range(4):
+        _, _, dones, infos = env.step(np.array([4, 4]))
+        assert not dones.any() and not infos[0]["TimeLimit.truncated"]
+    obs, _, dones, infos = env.step(np.array([4, 4]))
+    assert dones.all() and all(i["TimeLimit.truncated"] for i in infos)
+    assert all(i["episode"]["l"] == 5 for i in infos)
+    # The returned observation is the reset one, the last one is kept aside.
+    assert not np.array_equal(obs[0], infos[0]["terminal_observation"])
+
+
+@needs_sb3
+def test_sb3_ppo_learns_a_few_steps_through_the_adapter_and_reloads(tmp_path):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.evaluation import evaluate_policy
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    env = ChopperScapeVecEnv(4, seed=0, obs_type="features", max_fuel=200)
+    model = PPO("MlpPolicy", env, n_steps=128, batch_size=128, n_epochs=1, seed=0, device="cpu")
+    model.learn(1024)
+    assert len(model.ep_info_buffer) > 0, "episode statistics reach SB3's logger without a Monitor"
+    import torch
+
+    assert all(torch.isfinite(p).all() for p in model.policy.parameters())
+    model.save(tmp_path / "ppo")
+    again = PPO.load(tmp_path / "ppo", device="cpu")
+    obs = env.reset()
+    assert np.array_equal(model.predict(obs, deterministic=True)[0], again.predict(obs, deterministic=True)[0])
+    returns, lengths = evaluate_policy(again, env, n_eval_episodes=4, return_episode_rewards=True, warn=False)
+    # Whole episodes reach SB3: +1 a step, and a bird hit pays -10 in place of the +1 (lives=1); never past the fuel
+    # cap without a tank, so every episode ends by a bird (length - 11) or with its fuel (the return is its length).
+    assert len(returns) == 4 and all(r in (n, n - 11) for r, n in zip(returns, lengths)), (returns, lengths)
+
+
+@needs_sb3
+def test_sb3_cnn_policy_accepts_grayscale_with_a_channel_axis():
+    from stable_baselines3 import PPO
+
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+
+    env = ChopperScapeVecEnv(2, seed=0, obs_type="grayscale", obs_size=(84, 84), max_fuel=100)
+    assert env.observation_space.shape == (84, 84, 1)
+    model = PPO("CnnPolicy", env, n_steps=32, batch_size=32, n_epochs=1, device="cpu")
+    model.learn(64)
+    stacked = ChopperScapeVecEnv(2, obs_type="grayscale", obs_size=(84, 84), frame_stack=4)
+    assert stacked.observation_space.shape == (84, 84, 4)

@@ -1,0 +1,152 @@
+"""The PPO recipe's training loop (`chopperscape.learn.train`): a run trains, saves and evaluates; runs are
+reproducible and follow env steps, not the clock; the progress diagnostics are sane; the pixel preset at a smoke size.
+Smoke sizes only: learning itself is a benchmark (README, docs/learning.md)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import needs_torch, progress_rows
+
+
+@needs_torch
+def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
+    from chopperscape.learn import evaluate, players, train
+    from chopperscape.learn.recipe import Recipe
+
+    recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 200}, hidden=32, total_steps=3000)
+    path = train.train(recipe, tmp_path)
+    rows = (tmp_path / "progress.csv").read_text().splitlines()
+    assert rows[0] == ",".join(train.CSV_COLUMNS)
+    last = dict(zip(train.CSV_COLUMNS, rows[-1].split(",")))
+    assert int(last["env_steps"]) >= 3000 and int(last["episodes"]) > 0
+    assert all(math.isfinite(float(v)) for v in last.values() if v != "")
+    # The checkpoint reloads into the same policy: evaluation is reproducible and uses the training options.
+    assert evaluate.main([str(path), "--episodes", "3", "--seed", "77"]) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert evaluate.main([str(path), "--episodes", "3", "--seed", "77", "--per-episode"]) == 0
+    second = json.loads(capsys.readouterr().out)
+    assert {k: first[k] for k in first if k != "per_episode"} == {k: second[k] for k in first}
+    assert first["episodes"] == 3 and sum(first["causes"].values()) == pytest.approx(1.0, abs=0.01)
+    assert [e["seed"] for e in second["per_episode"]] == [77, 78, 79]
+    # max_fuel=200 came from the model: evaluate plays under the options the model was trained with, and giving
+    # them again explicitly changes nothing.
+    _, options = players.load_recipe(path, False, 0, {})
+    assert options["max_fuel"] == 200
+    assert (
+        evaluate.main([str(path), "--episodes", "3", "--seed", "77", "--per-episode", "--option", "max_fuel=200"]) == 0
+    )
+    assert json.loads(capsys.readouterr().out) == second
+
+
+@needs_torch
+def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_path):
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
+
+    def run(name, **kw):
+        recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=6000, **kw)
+        train.train(recipe, tmp_path / name)
+        return progress_rows(tmp_path / name / "progress.csv")
+
+    first, second = run("a"), run("b")
+    assert len(first) >= 5
+    # Identical apart from the time column: same seed and budget, same curve, whatever the host's load.
+    drop = [{k: v for k, v in r.items() if k != "wall_s"} for r in first]
+    assert drop == [{k: v for k, v in r.items() if k != "wall_s"} for r in second]
+    # The learning rate anneals linearly over the step budget from the start: lr = 3e-4 * (1 - steps / budget).
+    lrs = [float(r["learning_rate"]) for r in first]
+    assert lrs == sorted(lrs, reverse=True) and lrs[0] == 3e-4 and lrs[-1] < 1e-4
+    steps_before = [0] + [int(r["env_steps"]) for r in first[:-1]]
+    for r, before in zip(first, steps_before):
+        assert float(r["learning_rate"]) == pytest.approx(3e-4 * max(1 - before / 6000, 0.05), rel=1e-4)
+    # Another seed is another run.
+    assert [r["mean_return"] for r in run("c", seed=1)] != [r["mean_return"] for r in first]
+
+
+@needs_torch
+def test_progress_diagnostics_are_sane(tmp_path):
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
+
+    recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 100}, hidden=16, total_steps=4000)
+    train.train(recipe, tmp_path)
+    rows = progress_rows(tmp_path / "progress.csv")
+    for r in rows:
+        # Entropy of a 5-action policy lies in [0, ln 5]; the fresh policy is nearly uniform.
+        assert 0 <= float(r["entropy"]) <= math.log(5) + 1e-6
+        assert 0 <= float(r["clip_frac"]) <= 1 and float(r["approx_kl"]) >= -1e-6
+        assert float(r["explained_var"]) <= 1 and float(r["value_loss"]) >= 0
+        if int(r["ended"]):
+            assert r["mean_return"] != ""
+            shares = [float(r[k]) for k in ("bird", "fuel", "limit")]
+            assert sum(shares) == pytest.approx(1, abs=0.002)
+    assert float(rows[0]["entropy"]) > 0.95 * math.log(5)
+    # With 100 fuel and a policy that cannot yet refuel, fuel ends most episodes; no episode reaches 10,000 steps.
+    ended = sum(int(r["ended"]) for r in rows)
+    fuel = sum(float(r["fuel"]) * int(r["ended"]) for r in rows if int(r["ended"]))
+    assert ended == int(rows[-1]["episodes"]) and fuel / ended > 0.3
+    assert all(float(r["limit"] or 0) == 0 for r in rows)
+
+
+@needs_torch
+def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
+    import chopperscape
+    from chopperscape.learn import evaluate, model, train
+
+    # The pixel preset at a smoke size: small frames, few envs; the same code path as the full recipe.
+    out = tmp_path / "px"
+    assert (
+        train.main(
+            [
+                "--preset",
+                "pixels",
+                "--steps",
+                "1200",
+                "--num-envs",
+                "8",
+                "--num-steps",
+                "32",
+                "--out",
+                str(out),
+                "--option",
+                "obs_size=42x42",
+                "--option",
+                "max_fuel=300",
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    recipe = json.loads((out / "recipe.json").read_text())
+    assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.998
+    assert recipe["env_options"] == {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4, "max_fuel": 300}
+    rows = progress_rows(out / "progress.csv")
+    assert rows and all(math.isfinite(float(r[k])) for r in rows for k in ("entropy", "value_loss", "policy_loss"))
+    import torch
+
+    payload = torch.load(out / "model.pt", weights_only=True)
+    assert payload["obs_shape"] == [42, 42, 4] and payload["pixels_version"] == chopperscape.PIXELS_VERSION
+    # A model of a later pixel layout is refused, naming both versions; one of an older layout is shown that
+    # layout (version 2: the art; version 1: the art and the text HUD), its own options over those.
+    later = chopperscape.PIXELS_VERSION + 1
+    with pytest.raises(ValueError, match=f"pixel layout v{later}, and this chopperscape draws v{later - 1}"):
+        model.agent_from_checkpoint({**payload, "pixels_version": later})
+    assert model.from_payload({**payload, "pixels_version": 2}).recipe["env_options"]["look"] == "art"
+    old = model.from_payload({**payload, "pixels_version": 1}).recipe["env_options"]
+    assert (old["look"], old["hud_style"], old["max_fuel"]) == ("art", "text", 300)
+    assert "look" not in model.from_payload(payload).recipe["env_options"]
+    agent = model.agent_from_checkpoint(payload)
+    assert isinstance(agent, model.CnnAgent)
+    # The frame skip, stack and size came back from the model: evaluation plays the frames it was trained on.
+    assert evaluate.main([str(out / "model.pt"), "--episodes", "2", "--seed", "9", "--per-episode"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["episodes"] == 2 and all(e["return"] % 4 == 0 or e["cause"] == "bird" for e in res["per_episode"])
+    # Reloading gives the same greedy actions on the same frames.
+    env_obs = np.random.default_rng(0).integers(0, 256, (3, 42, 42, 4), dtype=np.uint8)
+    again = model.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
+    with torch.no_grad():
+        assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
