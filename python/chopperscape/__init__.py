@@ -38,8 +38,9 @@ OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_st
 MODES: list[dict] = [dict(m, options=dict(m["options"])) for m in _core.MODES]
 #: The layout version of the `"features"` observation.
 FEATURES_VERSION: int = _core.FEATURES_VERSION
-#: The version of what pixel observations show (docs/SPEC.md, "HUD and pixel layout"): 2 = fuel and lives gauges
-#: in frames under 300 × 400 with the default `hud_style="auto"`; 1 = the text line at every size.
+#: The version of what pixel observations show (docs/SPEC.md, "HUD and pixel layout"): 3 = the agent view in
+#: frames under 300 × 400 with the default `look="auto"`; 2 = the art there, with the fuel and lives gauges
+#: (`hud_style="auto"`); 1 = the text line at every size.
 PIXELS_VERSION: int = _core.PIXELS_VERSION
 
 if "ChopperScape-v0" not in registry:

@@ -114,6 +114,7 @@ class ChopperScapeEnv(gym.Env):
     | `frame_stack` | 1 | 1..=64 |
     | `hud` | `True` | `True`, `False`: draw the HUD (fuel and lives, see above) into pixel observations |
     | `hud_style` | `"auto"` | `"auto"` (text in frames of at least 300 × 400, bars below), `"text"`, `"gauge"`; `render()` shows the text unless `"gauge"` |
+    | `look` | `"auto"` | `"auto"` (the art in frames of at least 300 × 400, the agent view below), `"art"`, `"agent"`; `render()` always shows the art |
     | `keep_dim` | `False` | give `"grayscale"` without stacking a channel axis, `(H, W, 1)` instead of `(H, W)` (what CNN policies such as SB3's `CnnPolicy` expect; a view, no copy) |
     | `mode` | `None` | `None`, `"v0"`, `"sticky-v0"`, `"full-v0"`: a difficulty mode of ChopperScape-Bench (`chopperscape.MODES`), which fixes every rules option below (an option given beside it must agree); `gymnasium.make("ChopperScape-Sticky-v0")` and `"ChopperScape-Full-v0"` give it |
     | `lives` | 1 | 1..=1000 |

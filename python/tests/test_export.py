@@ -83,7 +83,8 @@ def test_the_committed_export_is_of_the_committed_model(model, exported, obs_typ
         shape,
         options,
     )
-    assert (meta["features_version"], meta["pixels_version"]) == ("2", "3")
+    # Both were exported when the pixel layout was 2 (the art): the loaders show the pixel policy that layout.
+    assert (meta["features_version"], meta["pixels_version"]) == ("2", "2")
 
 
 @needs_torch

@@ -42,7 +42,7 @@ def decode(frame: np.ndarray, bar, full: int) -> float:
 
 def test_the_layout_versions_are_exposed():
     assert chopperscape.PIXELS_VERSION == 3 and chopperscape.FEATURES_VERSION == 2
-    assert chopperscape._core.SNAPSHOT_VERSION == 2
+    assert chopperscape._core.SNAPSHOT_VERSION == 3
 
 
 @pytest.mark.parametrize("max_fuel", [1000, 237])

@@ -31,6 +31,7 @@ OPTION_VALUES = {
     "frame_stack": "2",
     "hud": "false",
     "hud_style": "gauge",
+    "look": "agent",
     "lives": "2",
     "bird_fuel_collision": "destroy",
     "alien_prob": "0.1",

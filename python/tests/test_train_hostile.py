@@ -123,7 +123,8 @@ def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_
     assert "Traceback" not in err and "is saved in" in err, err
     model = torch.load(run / "model.pt", weights_only=True)
     assert model["env_steps"] > 0
-    assert sorted(os.listdir(run)) == ["model.pt", "progress.csv", "recipe.json"]
+    # Stopped by a signal, the run keeps what it reached and the state to go on from (`--resume`).
+    assert sorted(os.listdir(run)) == ["model.pt", "progress.csv", "recipe.json", "resume.pt"]
 
 
 def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatch):

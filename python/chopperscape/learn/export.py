@@ -69,7 +69,9 @@ def load(path: Path):
     payload = read_checkpoint(path, what)  # a regular file of a model's size, tensors and plain data
     agent, model_shape, norm, recipe = from_payload(payload, what)
     # The env's own observation (the Rust env has no `keep_dim`: a grayscale frame without a channel axis).
-    options = {k: v for k, v in recipe["env_options"].items() if k != "keep_dim"}
+    # The options it was trained with, as written in the file: a policy of an older pixel layout says so by its
+    # `pixels_version`, and every loader (the policy crate, `model.learned_options`) draws it that layout.
+    options = {k: v for k, v in payload["recipe"].get("env_options", {}).items() if k != "keep_dim"}
     env_shape = observation_shape({"obs_type": recipe["obs_type"], **options})
     if int(np.prod(env_shape)) != int(np.prod(model_shape)):
         raise ValueError(f"{what} takes observations of shape {model_shape}, but its env options give {env_shape}")
