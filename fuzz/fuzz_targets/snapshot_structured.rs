@@ -15,6 +15,7 @@ enum Edit {
     ObsSize(u32, u32),
     FrameStack(u32),
     HudStyle(u8),
+    Look(u8),
     Lives(u32),
     FrameSkip(u32),
     MaxFuel(u32),
@@ -50,7 +51,7 @@ struct Input {
     steps_after: Vec<u8>,
 }
 
-/// A snapshot's payload as fields, in format order (version 2: see crates/core/src/snapshot.rs).
+/// A snapshot's payload as fields, in format order (version 3: see crates/core/src/snapshot.rs).
 #[derive(Clone, Debug)]
 struct Fields {
     head: [u8; 1],
@@ -58,6 +59,7 @@ struct Fields {
     frame_stack: u32,
     hud: u8,
     hud_style: u8,
+    look: u8,
     lives: u32,
     bfc: u8,
     alien_prob: f64,
@@ -117,6 +119,7 @@ fn parse(bytes: &[u8]) -> Fields {
         frame_stack: r.u32(),
         hud: r.u8(),
         hud_style: r.u8(),
+        look: r.u8(),
         lives: r.u32(),
         bfc: r.u8(),
         alien_prob: r.f64(),
@@ -159,6 +162,7 @@ fn encode(f: &Fields, stack_len: Option<u32>) -> Vec<u8> {
     u32(&mut p, f.frame_stack);
     p.push(f.hud);
     p.push(f.hud_style);
+    p.push(f.look);
     u32(&mut p, f.lives);
     p.push(f.bfc);
     p.extend_from_slice(&f.alien_prob.to_le_bytes());
@@ -220,6 +224,7 @@ fn apply(f: &mut Fields, e: &Edit, stack_len: &mut Option<u32>) {
         Edit::ObsSize(h, w) => f.obs_size = (h, w),
         Edit::FrameStack(k) => f.frame_stack = k,
         Edit::HudStyle(v) => f.hud_style = v,
+        Edit::Look(v) => f.look = v,
         Edit::Lives(l) => f.lives = l,
         Edit::FrameSkip(s) => f.frame_skip = s,
         Edit::MaxFuel(m) => f.max_fuel = m,
@@ -285,6 +290,7 @@ fuzz_target!(|input: Input| {
         obs_size: (8 + u32::from(input.obs_type % 5), 8 + u32::from(input.obs_type % 7)),
         frame_stack: 1 + u32::from(input.frame_stack % 4),
         hud_style: chopperscape::HudStyle::ALL[input.hud_style as usize % 3],
+        look: chopperscape::Look::ALL[input.hud_style as usize / 3 % 3],
         lives: 1 + u32::from(input.lives % 4),
         alien_prob: if input.aliens { 0.2 } else { 0.0 },
         bird_prob: 0.2,
