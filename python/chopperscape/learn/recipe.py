@@ -46,10 +46,10 @@ RECIPE_FLAGS = (
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
 #: the command line win. ``pixels`` learns from 84×84 grayscale frames, 4 stacked, each action held for 4 frames
 #: (env steps then count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995
-#: per frame (0.9995⁴ ≈ 0.998), and it keeps its measured entropy 0.01. On the art (pixel layout 2) frames alone
-#: did not train it here; on the agent view (layout 3) at 42×42 with GAE λ 0.98 it learns from frames alone, slowly
-#: (1,450 held out after 2 M decisions: docs/learning.md, "Teacher-free probes"). A features teacher (`--teacher`)
-#: of the same frame skip is the faster, privileged route.
+#: per frame (0.9995⁴ ≈ 0.998), and it keeps its measured entropy 0.01. With GAE λ 0.95 frames alone did not train
+#: it here; at 42×42 with `--gae-lambda 0.98` it learns from frames alone, slowly, on either look (1,545 held out
+#: after 3.2 M decisions: docs/learning.md, "Teacher-free probes"). A features teacher (`--teacher`) of the same
+#: frame skip is the faster, privileged route.
 PRESETS: dict[str, dict[str, Any]] = {
     "features": {},
     "pixels": {
