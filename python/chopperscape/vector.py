@@ -210,10 +210,21 @@ class VectorEnv(gym.vector.VectorEnv):
         )
         return infos
 
+    def batch_state(self) -> tuple[bool, list[tuple[bytes, bool, int]]]:
+        """Every environment's whole state (snapshot bytes, whether it awaits its reset, its step count) and
+        whether the batch has been reset: what pickling and `train --resume` save."""
+        return self._core.state()
+
+    def set_batch_state(self, started: bool, envs: list[tuple[bytes, bool, int]]) -> None:
+        """Puts the batch in a state :meth:`batch_state` took (each snapshot checked by the core: `ValueError`
+        naming what is wrong, and nothing changes)."""
+        self._core.set_state(started, envs)
+        self._stream_started = bool(started) or self._stream_started
+
     def __getstate__(self) -> dict[str, Any]:
         """Pickles the options and every environment's state; unpickling continues exactly from there."""
         state = self.__dict__.copy()
-        state["_core"] = self._core.state()
+        state["_core"] = self.batch_state()
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:

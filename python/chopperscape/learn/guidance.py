@@ -174,7 +174,7 @@ class Guidance:
 
 def env_state(envs: VectorEnv) -> dict[str, Any]:
     """A vector env's whole state as tensors and plain data (what `torch.load(weights_only=True)` reads back)."""
-    started, each = envs._core.state()
+    started, each = envs.batch_state()
     return {
         "started": bool(started),
         "snapshots": [torch.frombuffer(bytearray(b), dtype=torch.uint8) for b, _, _ in each],
@@ -188,5 +188,4 @@ def set_env_state(envs: VectorEnv, s: dict[str, Any]) -> None:
     each = [(bytes(t.numpy().tobytes()), f, k) for t, f, k in zip(s["snapshots"], s["flags"], s["steps"])]
     if len(each) != envs.num_envs:
         raise ValueError(f"the resume state holds {len(each)} envs, the run has {envs.num_envs}")
-    envs._core.set_state(bool(s["started"]), each)
-    envs._stream_started = True
+    envs.set_batch_state(bool(s["started"]), each)

@@ -165,12 +165,10 @@ def random_shift(x: torch.Tensor, pad: int, generator: torch.Generator | None = 
     if squeeze:
         x = x.unsqueeze(-1)
     n, h, w, _ = x.shape
-    rows = torch.arange(h, device=x.device).clamp_(0, h - 1)
-    cols = torch.arange(w, device=x.device)
     off = torch.randint(0, 2 * pad + 1, (2, n), device=x.device, generator=generator)
     # Edge padding as clamped indices: row r of the padded frame is row clamp(r - pad) of the frame.
-    r = (rows[None, :] + off[0][:, None] - pad).clamp_(0, h - 1)
-    c = (cols[None, :] + off[1][:, None] - pad).clamp_(0, w - 1)
+    r = (torch.arange(h, device=x.device)[None, :] + off[0][:, None] - pad).clamp_(0, h - 1)
+    c = (torch.arange(w, device=x.device)[None, :] + off[1][:, None] - pad).clamp_(0, w - 1)
     out = x[torch.arange(n, device=x.device)[:, None, None], r[:, :, None], c[:, None, :]]
     return out.squeeze(-1) if squeeze else out
 

@@ -80,6 +80,12 @@ pub fn layout_options(version: u32) -> Option<&'static [(&'static str, &'static 
     }
 }
 
+/// Whether a `height × width` frame is at least [`TEXT_MIN_SIZE`]: where `"auto"` draws what the full frame shows
+/// (the text HUD, the art) rather than what agents read (the gauges, the agent view).
+fn full_looking(height: u32, width: u32) -> bool {
+    height >= TEXT_MIN_SIZE.0 && width >= TEXT_MIN_SIZE.1
+}
+
 /// The smallest frame `(height, width)` in which `hud_style = "auto"` draws the text line: half the full size,
 /// where every bit of the font still covers a pixel.
 pub const TEXT_MIN_SIZE: (u32, u32) = (HEIGHT as u32 / 2, WIDTH as u32 / 2);
@@ -102,7 +108,7 @@ impl Hud {
             (false, _) => Hud::Off,
             (true, HudStyle::Text) => Hud::Text,
             (true, HudStyle::Gauge) => Hud::Gauge,
-            (true, HudStyle::Auto) if height >= TEXT_MIN_SIZE.0 && width >= TEXT_MIN_SIZE.1 => Hud::Text,
+            (true, HudStyle::Auto) if full_looking(height, width) => Hud::Text,
             (true, HudStyle::Auto) => Hud::Gauge,
         }
     }
@@ -122,7 +128,7 @@ impl Look {
     /// What `self` draws in a `height × width` frame: [`Look::Art`] or [`Look::Agent`], never `Auto`.
     pub fn at(self, height: u32, width: u32) -> Look {
         match self {
-            Look::Auto if height >= TEXT_MIN_SIZE.0 && width >= TEXT_MIN_SIZE.1 => Look::Art,
+            Look::Auto if full_looking(height, width) => Look::Art,
             Look::Auto => Look::Agent,
             other => other,
         }
