@@ -14,6 +14,7 @@ from gymnasium.envs.registration import register, registry
 
 from . import _core, policies
 from .env import ChopperScapeEnv, clone_state, restore_state
+from .modes import MODES
 from .vector import VectorEnv
 
 __all__ = [
@@ -32,10 +33,6 @@ __all__ = [
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
-#: The difficulty modes (ChopperScape-Bench, `docs/site/bench.md`), easiest first, as the core declares them:
-#: `name` (what `mode=` takes), `id` (its Gymnasium id), `doc`, `options` (the rules options it sets, as text;
-#: every other rules option keeps its default; observation options stay free).
-MODES: list[dict] = [dict(m, options=dict(m["options"])) for m in _core.MODES]
 #: The layout version of the `"features"` observation.
 FEATURES_VERSION: int = _core.FEATURES_VERSION
 #: The version of what pixel observations show (docs/SPEC.md, "HUD and pixel layout"): 3 = the agent view in

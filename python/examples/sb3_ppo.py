@@ -2,6 +2,13 @@
 
     python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-default                # SB3's defaults
     python python/examples/sb3_ppo.py --steps 15000000 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
+    python python/examples/sb3_ppo.py --pixels 42 --steps 2000000 --out runs/sb3-pixels42  # CnnPolicy on frames
+
+`--pixels SIZE` is what a pixel-RL user tries first: SB3's `CnnPolicy` (the Nature CNN) with RL Zoo's Atari PPO
+settings (8 envs × 128 steps, 4 epochs of batches of 256, learning rate 2.5e-4 and clip 0.1 both annealed linearly,
+entropy 0.01, γ 0.99) on the agent view: SIZE×SIZE grayscale frames, 4 stacked, each action held 4 frames (env steps
+count decisions). Evaluate it with the same options: ``python -m chopperscape.learn.evaluate OUT/model.zip --option
+obs_type='"grayscale"' --option obs_size=[42,42] --option frame_stack=4 --option frame_skip=4``.
 
 `--tuned` uses what ``chopperscape.learn.train`` uses, read from :class:`chopperscape.learn.recipe.Recipe`'s defaults
 (γ, GAE λ, 64 envs × 256 steps, 8 minibatches, 4 epochs, clip, entropy and value coefficients, gradient clip,
@@ -75,6 +82,9 @@ def main() -> None:
         "--minutes", type=float, default=None, help="stop after this much wall time (default 30 without --steps)"
     )
     p.add_argument("--tuned", action="store_true", help="the recipe's hyperparameters instead of SB3's defaults")
+    p.add_argument(
+        "--pixels", type=int, default=None, metavar="SIZE", help="CnnPolicy on SIZE x SIZE frames, RL Zoo's Atari PPO"
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1 is fastest for these small MLPs)")
     a = p.parse_args()
@@ -83,7 +93,27 @@ def main() -> None:
     steps = a.steps or 10**10
     torch.set_num_threads(a.torch_threads)
     a.out.mkdir(parents=True, exist_ok=True)
-    if a.tuned:
+    if a.tuned and a.pixels is not None:
+        p.error("--tuned is the features recipe's settings; --pixels has RL Zoo's Atari settings: give one")
+    if a.pixels is not None and not 36 <= a.pixels <= 600:
+        p.error(f"--pixels {a.pixels}: the Nature CNN needs frames of 36 to 600 pixels a side")
+    if a.pixels is not None:
+        frames = {"obs_size": [a.pixels, a.pixels], "frame_stack": 4, "frame_skip": 4}
+        env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="grayscale", **frames)
+        model = PPO(
+            "CnnPolicy",
+            env,
+            n_steps=128,
+            n_epochs=4,
+            batch_size=256,
+            learning_rate=lambda remaining: 2.5e-4 * remaining,
+            clip_range=lambda remaining: 0.1 * remaining,
+            ent_coef=0.01,
+            vf_coef=0.5,
+            seed=a.seed,
+            device="cpu",
+        )
+    elif a.tuned:
         r = Recipe()
         env = VecNormalize(ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features"), gamma=r.gamma)
         lr = r.learning_rate

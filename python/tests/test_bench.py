@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import chopperscape
+import chopperscape.modes
 from chopperscape import _core
 from chopperscape.bench import evaluate, protocol, report, results
 from chopperscape.bench.__main__ import main
@@ -46,7 +47,7 @@ def _first_reward(env, **kw) -> float:
 
 @pytest.mark.parametrize("name", ["v0", "sticky-v0", "full-v0"])
 def test_mode_gives_the_same_rules_on_every_surface(name):
-    m = protocol.mode(name)
+    m = chopperscape.modes.mode(name)
     skip = int(m["options"].get("frame_skip", "1"))
     env = chopperscape.ChopperScapeEnv(mode=name, obs_type="features")
     made = gym.make(m["id"], obs_type="features")

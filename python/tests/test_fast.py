@@ -54,6 +54,28 @@ def test_the_preset_is_the_command_lines(tmp_path):
     assert (saved["num_envs"], saved["num_steps"], saved["total_steps"]) == (8, 16, 256)
 
 
+@pytest.mark.parametrize("mode", ["sticky-v0", "full-v0"])
+def test_train_mode_trains_on_the_modes_rules_and_its_model_plays_them(mode, tmp_path, capsys):
+    """`train --mode M` records exactly the options the mode sets (every other rules option at its default, as the
+    core's `mode=` means), so `evaluate` and the bench play the model on the rules it learned."""
+    from chopperscape import MODES, _core
+    from chopperscape.bench import mode_options
+    from chopperscape.learn import evaluate, train
+
+    out = tmp_path / "run"
+    code = train.main(["--preset", "fast", "--mode", mode, "--num-envs", "8", "--num-steps", "16", "--steps", "256",
+                       "--out", str(out)])  # fmt: skip
+    assert code == 0
+    saved = json.loads((out / "recipe.json").read_text())["env_options"]
+    listed = next(m for m in MODES if m["name"] == mode)["options"]
+    assert saved == {k: _core.option_value(k, v) for k, v in listed.items()}
+    rules = {k: v for k, v in mode_options(mode).items() if k != "mode"}
+    assert all(saved.get(k, v) == v for k, v in rules.items())
+    capsys.readouterr()
+    assert evaluate.main([str(out / "model.pt"), "--episodes", "2", "--seed", "1000000"]) == 0
+    assert json.loads(capsys.readouterr().out)["episodes"] == 2
+
+
 def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
     pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not installed (the SB3 anchor)")
     from chopperscape.learn.phases import PHASES

@@ -114,6 +114,9 @@ def test_resume_refuses_what_it_cannot_continue(tmp_path, capsys):
     assert e.value.code == 2
     err = capsys.readouterr().err
     assert "--learning-rate, --steps cannot be given with it" in err
+    with pytest.raises(SystemExit) as e:
+        train.main(["--resume", str(run), "--mode", "sticky-v0"])
+    assert e.value.code == 2 and "--mode cannot be given with it" in capsys.readouterr().err
     # A folder without a resume state, a damaged one, and one that runs code are refused by name, changing nothing.
     empty = tmp_path / "empty"
     empty.mkdir()

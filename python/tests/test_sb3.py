@@ -89,3 +89,36 @@ def test_sb3_cnn_policy_accepts_grayscale_with_a_channel_axis():
     model.learn(64)
     stacked = ChopperScapeVecEnv(2, obs_type="grayscale", obs_size=(84, 84), frame_stack=4)
     assert stacked.observation_space.shape == (84, 84, 4)
+
+
+@needs_sb3
+def test_sb3_cnn_policy_on_stacked_frames_is_read_back_without_pickle_by_evaluate_and_the_bench(tmp_path, capsys):
+    """SB3 holds a channel-last frame stack channels first (`VecTransposeImage`); the no-pickle loader and the
+    shape check follow it, so `python/examples/sb3_ppo.py --pixels` models evaluate, and a wrong size is named."""
+    import json
+
+    from stable_baselines3 import PPO
+
+    from chopperscape.bench import __main__ as bench
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+    from chopperscape.learn import evaluate
+
+    frames = {"obs_type": "grayscale", "obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4}
+    model = PPO("CnnPolicy", ChopperScapeVecEnv(2, seed=0, **frames), n_steps=16, batch_size=16, n_epochs=1)
+    model.learn(32)
+    assert model.observation_space.shape == (4, 42, 42)
+    model.save(tmp_path / "model.zip")
+
+    def flags(names: dict) -> list[str]:
+        return [x for k, v in names.items() for x in ("--option", f"{k}={json.dumps(v)}")]
+
+    options = flags(frames)
+    assert evaluate.main([str(tmp_path / "model.zip"), "--episodes", "2", *options]) == 0
+    assert json.loads(capsys.readouterr().out)["episodes"] == 2
+    sticky = flags({k: v for k, v in frames.items() if k != "frame_skip"})  # the mode fixes the rules
+    out = tmp_path / "results.json"
+    assert bench.main(["evaluate", str(tmp_path / "model.zip"), "--mode", "sticky-v0", *sticky, "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["policy"]["kind"] == "sb3"
+    wrong = [o.replace("[42, 42]", "[48, 48]") for o in options]
+    assert evaluate.main([str(tmp_path / "model.zip"), "--episodes", "1", *wrong]) == 2
+    assert "(4, 42, 42)" in capsys.readouterr().err

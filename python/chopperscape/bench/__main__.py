@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from .._cli import ENV_OPTIONS, parse_options, print_line, run_command
+from ..modes import MODES
 from . import evaluate, protocol, report, results
 
 
@@ -17,7 +18,7 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser("modes", help="the difficulty modes and the protocol, as JSON")
     e = sub.add_parser("evaluate", help="evaluate a policy on one mode under the protocol")
     e.add_argument("policy", help="a built-in policy, a .pt, .onnx or SB3 .zip file, or pkg.mod:func")
-    e.add_argument("--mode", required=True, choices=[m["name"] for m in protocol.MODES])
+    e.add_argument("--mode", required=True, choices=[m["name"] for m in MODES])
     e.add_argument("--policy-seed", type=int, default=0, help="the run: seeds a stochastic policy (default 0)")
     e.add_argument("--stochastic", action="store_true", help="sample a trained policy's actions (not greedy)")
     e.add_argument("--option", action="append", default=[], metavar="NAME=VALUE", help="observation option")
@@ -39,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def command() -> int:
         if a.command == "modes":
-            return print_line(json.dumps({"modes": protocol.MODES, "protocol": protocol.PROTOCOL}, indent=2))
+            return print_line(json.dumps({"modes": MODES, "protocol": protocol.PROTOCOL}, indent=2))
         if a.command == "evaluate":
             options = parse_options(a.option, ENV_OPTIONS)
             seeds = None

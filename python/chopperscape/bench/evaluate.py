@@ -33,7 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import __version__, _atomic
+from .. import __version__, _atomic, modes
 from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
 from . import protocol, results
@@ -199,7 +199,7 @@ def run(
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
         raise ValueError(f"--policy-seed {policy_seed!r}: allowed 0 <= seed < 2**31")
-    m = protocol.mode(mode)
+    m = modes.mode(mode)
     if train_seeds is not None:
         protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
     loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .. import MODES, _core
+from ..modes import mode_options
 
 #: The version of this protocol: a change to anything below is a new version.
 VERSION = 1
@@ -62,25 +62,6 @@ def check_training_seeds(first: int, count: int = 1, what: str = "training") -> 
             f"{what} seeds {first}..{first + count - 1} overlap the evaluation seeds "
             f"{seeds.start}..{seeds.stop - 1} (seed {lo}): train on other seeds (the protocol, docs/site/bench.md)"
         )
-
-
-def mode(name: str) -> dict[str, Any]:
-    """The mode `name` of `chopperscape.MODES`; `ValueError` listing the names."""
-    for m in MODES:
-        if m["name"] == name:
-            return m
-    raise ValueError(f"unknown mode {name!r}: allowed {', '.join(m['name'] for m in MODES)}")
-
-
-def mode_options(name: str) -> dict[str, Any]:
-    """Every rules option mode `name` fixes, typed (`{"lives": 3, "frame_skip": 4, ...}`), and `mode` itself: keyword
-    options that replace whatever rules a model was trained with, and that the env checks against the mode."""
-    m = mode(name)
-    out: dict[str, Any] = {}
-    for o in _core.OPTIONS:
-        if o["rule"] and o["name"] != "max_episode_steps":
-            out[o["name"]] = _core.option_value(o["name"], m["options"].get(o["name"], o["default"]))
-    return {**out, "mode": name}
 
 
 def max_return(name: str) -> int:

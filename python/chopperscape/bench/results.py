@@ -24,6 +24,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from .. import modes
 from . import protocol
 
 FORMAT = "chopperscape-bench/results/1"
@@ -75,7 +76,7 @@ def check(doc: Any) -> dict[str, Any]:
     mode = doc["mode"]
     _need(isinstance(mode, dict) and isinstance(mode.get("name"), str), "`mode.name` is missing")
     try:
-        known = protocol.mode(mode["name"])
+        known = modes.mode(mode["name"])
     except ValueError as e:
         raise ResultsError(f"`mode.name`: {e}") from None
     _need(

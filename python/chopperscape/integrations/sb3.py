@@ -261,6 +261,18 @@ def _named_class(text: Any, modules: Sequence[str]) -> type | None:
     return cls if isinstance(cls, type) else None
 
 
+def policy_space(space: gym.Space) -> gym.Space:
+    """The observation space an SB3 policy trained on an env of `space` holds: SB3 wraps a channel-last image
+    space (grayscale frames with `frame_stack`, RGB) in `VecTransposeImage`, so its policy takes channels first;
+    any other space unchanged. Its `predict` transposes the env's observations itself."""
+    from stable_baselines3.common.preprocessing import is_image_space, is_image_space_channels_first
+    from stable_baselines3.common.vec_env import VecTransposeImage
+
+    if isinstance(space, gym.spaces.Box) and is_image_space(space) and not is_image_space_channels_first(space):
+        return VecTransposeImage.transpose_space(space)
+    return space
+
+
 def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> dict[str, Any]:
     """`custom_objects` for `PPO.load(path, custom_objects=...)` that replace every pickled setting of an SB3
     model, so that loading it runs no code from the file: the spaces are this env's (`env_options`; the stored
@@ -279,7 +291,7 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a Stable-Baselines3 model: its `data` is not a JSON object")
     venv = VectorEnv(1, num_threads=1, max_episode_steps=None, **env_options)
-    obs_space, act_space = venv.single_observation_space, venv.single_action_space
+    obs_space, act_space = policy_space(venv.single_observation_space), venv.single_action_space
     venv.close()
     custom: dict[str, Any] = {}
     for key, item in data.items():

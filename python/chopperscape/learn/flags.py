@@ -9,6 +9,7 @@ import argparse
 from pathlib import Path
 
 from .._cli import ENV_OPTIONS, env_options
+from ..modes import MODES, with_mode
 from .recipe import (
     DEFAULT_STEPS,
     PRESETS,
@@ -64,6 +65,13 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         help="an env option, e.g. --option frame_skip=4 (JSON values)",
     )
     p.add_argument(
+        "--mode",
+        choices=[m["name"] for m in MODES],
+        default=None,
+        help="train on a ChopperScape-Bench mode's rules (docs/site/bench.md): the options it sets are set; a preset's "
+        "or an --option's value that contradicts the mode is refused",
+    )
+    p.add_argument(
         "--preset",
         choices=sorted(PRESETS),
         default=None,
@@ -93,7 +101,7 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     a = p.parse_args(args)
     if a.resume is not None:
         given = [f"--{f.replace('_', '-')}" for f in RECIPE_FLAGS if getattr(a, f) is not None]
-        others = {"--steps": a.steps, "--preset": a.preset, "--option": a.option or None}
+        others = {"--steps": a.steps, "--preset": a.preset, "--mode": a.mode, "--option": a.option or None}
         given += [k for k, v in others.items() if v is not None]
         given += [
             k
@@ -119,6 +127,11 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     preset.pop("total_steps", None)
     allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
     options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
+    if a.mode is not None:
+        try:
+            options = with_mode(a.mode, options)
+        except ValueError as e:
+            p.error(f"--mode {a.mode}: {e} (from --preset {a.preset} or --option)")
     settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
     settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
     recipe = Recipe(

@@ -16,7 +16,7 @@ import numpy as np
 from .._checks import regular_file
 from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
-from .episodes import observation_shape
+from .episodes import observation_shape, observation_space
 from .recipe import MAX_MODEL_BYTES
 
 
@@ -114,7 +114,8 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
     what = f"model file {str(path)!r}"
     # As the adapter gives them (`ChopperScapeVecEnv(keep_dim=True)`): grayscale with a channel axis.
     env_options = {"keep_dim": True, **env_options}
-    shape = observation_shape(env_options)
+    # As SB3's policy holds them: channel-last frames (a frame stack) are transposed to channels first.
+    shape = tuple(sb3.policy_space(observation_space(env_options)).shape or ())
     if trust_pickle:
         model = PPO.load(path, device="cpu")
     else:
