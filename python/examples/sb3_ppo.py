@@ -33,6 +33,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
+from chopperscape import MODES
 from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings, save_normalization
 from chopperscape.learn import progress
 from chopperscape.learn.recipe import Recipe
@@ -85,6 +86,9 @@ def main() -> None:
     p.add_argument(
         "--pixels", type=int, default=None, metavar="SIZE", help="CnnPolicy on SIZE x SIZE frames, RL Zoo's Atari PPO"
     )
+    p.add_argument(
+        "--mode", choices=[m["name"] for m in MODES], default=None, help="a bench mode's rules (default v0's)"
+    )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1 is fastest for these small MLPs)")
     a = p.parse_args()
@@ -92,14 +96,17 @@ def main() -> None:
         a.minutes = 30.0
     steps = a.steps or 10**10
     torch.set_num_threads(a.torch_threads)
-    a.out.mkdir(parents=True, exist_ok=True)
+    rules = {} if a.mode is None else {"mode": a.mode}
     if a.tuned and a.pixels is not None:
         p.error("--tuned is the features recipe's settings; --pixels has RL Zoo's Atari settings: give one")
     if a.pixels is not None and not 36 <= a.pixels <= 600:
         p.error(f"--pixels {a.pixels}: the Nature CNN needs frames of 36 to 600 pixels a side")
     if a.pixels is not None:
         frames = {"obs_size": [a.pixels, a.pixels], "frame_stack": 4, "frame_skip": 4}
-        env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="grayscale", **frames)
+        try:
+            env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="grayscale", **frames, **rules)
+        except ValueError as e:  # a mode whose frame skip is not 4
+            p.error(f"--pixels: {e}")
         model = PPO(
             "CnnPolicy",
             env,
@@ -115,7 +122,7 @@ def main() -> None:
         )
     elif a.tuned:
         r = Recipe()
-        env = VecNormalize(ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features"), gamma=r.gamma)
+        env = VecNormalize(ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features", **rules), gamma=r.gamma)
         lr = r.learning_rate
         model = PPO(
             "MlpPolicy",
@@ -126,8 +133,9 @@ def main() -> None:
             device="cpu",
         )
     else:
-        env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="features")
+        env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="features", **rules)
         model = PPO("MlpPolicy", env, seed=a.seed, device="cpu")
+    a.out.mkdir(parents=True, exist_ok=True)
     model.learn(steps, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
     model.save(a.out / "model.zip")
     if a.tuned:

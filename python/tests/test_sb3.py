@@ -5,6 +5,7 @@ contract under hostile input: `test_sb3_contract.py`.)"""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from conftest import SHORT, needs_sb3
 
 
@@ -122,3 +123,25 @@ def test_sb3_cnn_policy_on_stacked_frames_is_read_back_without_pickle_by_evaluat
     wrong = [o.replace("[42, 42]", "[48, 48]") for o in options]
     assert evaluate.main([str(tmp_path / "model.zip"), "--episodes", "1", *wrong]) == 2
     assert "(4, 42, 42)" in capsys.readouterr().err
+
+
+@needs_sb3
+@pytest.mark.parametrize("args", [["--pixels", "42", "--mode", "sticky-v0"], ["--tuned", "--mode", "full-v0"]])
+def test_the_sb3_example_trains_on_a_mode_and_refuses_what_contradicts_it(args, tmp_path):
+    """`python/examples/sb3_ppo.py` (the documented SB3 rows): a few steps on a mode's rules save a model; a frame
+    skip the mode does not have is named, exit status 2, nothing written."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "python" / "examples" / "sb3_ppo.py"
+    run = [sys.executable, str(script), *args, "--seed", "3", "--steps", "64"]
+    done = subprocess.run([*run, "--out", str(tmp_path / "ok")], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "ok" / "model.zip").is_file() and (tmp_path / "ok" / "progress.csv").is_file()
+    if "--pixels" in args:
+        at = run.index("sticky-v0")
+        wrong = [*run[:at], "v0", *run[at + 1 :], "--out", str(tmp_path / "no")]
+        done = subprocess.run(wrong, capture_output=True, text=True, timeout=600)
+        assert done.returncode == 2 and "frame_skip 4 != 1" in done.stderr
+        assert not (tmp_path / "no").exists()
