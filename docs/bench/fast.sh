@@ -10,8 +10,9 @@ PY=${PYTHON:-python}
 mode=${1:?a mode: sticky-v0 or full-v0}; shift
 runs=${1:?a folder for the runs}; shift
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
+NAME="fast preset: PPO on features, 3 M decisions"
 for s in ${seeds[*]}; do
   "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$runs/seed-$s" --force >/dev/null
-  "$PY" -m chopperscape.bench evaluate "$runs/seed-$s/model.pt" --mode "$mode" \
+  "$PY" -m chopperscape.bench evaluate "$runs/seed-$s/model.pt" --mode "$mode" --name "$NAME" \
     --out "${RESULTS:-docs/bench/results}/$mode.fast.seed$s.json"
 done

@@ -142,6 +142,26 @@ def test_the_same_policy_gives_the_same_results_twice(tmp_path, capsys):
     assert not list(tmp_path.glob(".*tmp"))
 
 
+def test_runs_named_alike_are_one_row_and_a_bad_name_is_refused(tmp_path, capsys):
+    """`--name` groups the runs of one recipe (its training seeds) into one row, whatever their files' paths; a
+    name the table cannot show is refused before anything is played or written."""
+    paths = []
+    for r in (0, 1):
+        paths.append(tmp_path / f"r{r}.json")
+        args = ["evaluate", "random", "--mode", "v0", "--policy-seed", str(r), "--name", "uniform", "--out"]
+        assert main([*args, str(paths[-1])]) == 0
+    assert results.load(paths[0])["policy"]["name"] == "uniform"
+    rows = report.report([results.load(p) for p in paths], resamples=100)
+    assert [(r["policy"], r["runs"]) for r in rows] == [("uniform @ v0", {"v0": 2})]
+    capsys.readouterr()
+    for bad in ("", "   ", "a|b", "x" * 81, "tab\there"):
+        out = tmp_path / "bad.json"
+        assert main(["evaluate", "random", "--mode", "v0", "--name", bad, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert "`policy.name`" in err and "1 to 80 printable characters" in err, err
+        assert not out.exists()
+
+
 def test_a_committed_row_reproduces():
     doc = results.load(RESULTS / "full-v0.random.seed7.json")
     again = evaluate.run("random", "full-v0", policy_seed=7)
@@ -204,6 +224,8 @@ def _good() -> dict:
         (lambda d: json.dumps({**d, "protocol": {**d["protocol"], "episodes": 10}}), "`protocol`"),
         (lambda d: json.dumps({**d, "mode": {**d["mode"], "name": "v7"}}), "unknown mode"),
         (lambda d: json.dumps({**d, "policy": {**d["policy"], "train_seeds": [1_000_000, 4]}}), "overlap"),
+        (lambda d: json.dumps({**d, "policy": {**d["policy"], "name": "a | b"}}), "`policy.name`"),
+        (lambda d: json.dumps({**d, "policy": {**d["policy"], "name": 3}}), "`policy.name`"),
     ],
 )
 def test_a_malformed_results_file_is_refused_with_its_name(tmp_path, damage, says):

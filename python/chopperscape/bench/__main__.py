@@ -28,6 +28,11 @@ def main(argv: list[str] | None = None) -> int:
         metavar="FIRST:COUNT",
         help="the reset seeds the policy was trained on, where its file does not say (checked, recorded)",
     )
+    e.add_argument(
+        "--name",
+        help="the leaderboard row this run belongs to (the runs of one recipe's training seeds share it); "
+        "default: the policy's source",
+    )
     e.add_argument("--out", metavar="FILE", help="write the results file here (atomically); default: print it")
     r = sub.add_parser("report", help="aggregates with 95 %% intervals over results files, and their plots")
     r.add_argument("results", nargs="+", metavar="RESULTS")
@@ -50,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
                     seeds = (int(first), int(count) if sep else 1)
                 except ValueError:
                     p.error(f"--train-seeds {a.train_seeds!r}: expected FIRST:COUNT, e.g. 0:64")
-            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds)
+            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds, a.name)
             text = results.dumps(doc)
             if a.out is None:
                 return print_line(text.rstrip("\n"))

@@ -191,15 +191,19 @@ def run(
     policy_seed: int = 0,
     trust_pickle: bool = False,
     train_seeds: tuple[int, int] | None = None,
+    name: str | None = None,
 ) -> dict[str, Any]:
     """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
     (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
-    `.zip`, a callable): they are checked against the evaluation seeds and recorded."""
+    `.zip`, a callable): they are checked against the evaluation seeds and recorded. `name` is the leaderboard row
+    the run belongs to (`results.check_name`): the runs of one recipe's training seeds share it."""
     from ..learn.episodes import play_episodes
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
         raise ValueError(f"--policy-seed {policy_seed!r}: allowed 0 <= seed < 2**31")
     m = modes.mode(mode)
+    if name is not None:
+        results.check_name(name)
     if train_seeds is not None:
         protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
     loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)
@@ -221,6 +225,7 @@ def run(
         "protocol": protocol.PROTOCOL,
         "policy": {
             **loaded.info,
+            **({} if name is None else {"name": name}),
             "policy_seed": policy_seed,
             "observation": {
                 k: list(v) if isinstance(v, tuple) else v for k, v in loaded.options.items() if k in OBS_OPTIONS

@@ -117,12 +117,15 @@ def profile_band(
 
 
 def _label(doc: dict[str, Any]) -> str:
+    """A row's label: the runs' `policy.name` where they carry one (the runs of one recipe's seeds), else the
+    policy's source; sampled actions are another row."""
     pol = doc["policy"]
-    return pol["source"] if pol["actions"] in ("greedy", "as-is") else f"{pol['source']} ({pol['actions']})"
+    what = pol.get("name", pol["source"])
+    return what if pol["actions"] in ("greedy", "as-is") else f"{what} ({pol['actions']})"
 
 
 def group(docs: Sequence[dict[str, Any]], pool_modes: bool = False) -> dict[str, dict[str, list[float]]]:
-    """`{row: {mode: [run scores]}}`. A row is a policy (its source, and its actions when sampled) on one mode;
+    """`{row: {mode: [run scores]}}`. A row is a policy (its name or source, and its actions when sampled) on one mode;
     with `pool_modes`, a policy on every mode it has runs of (the modes are then its tasks)."""
     out: dict[str, dict[str, list[float]]] = {}
     for d in docs:

@@ -3,7 +3,7 @@
 A results file is JSON, `"format": "chopperscape-bench/results/1"`:
 
     {"format": ..., "mode": {"name", "id", "options"}, "protocol": {...},
-     "policy": {"kind", "source", "sha256", "recipe", "actions", "policy_seed", "train_seeds"},
+     "policy": {"kind", "source", "sha256", "recipe", "actions", "policy_seed", "train_seeds", ["name"]},
      "package": {"name": "chopperscape", "version"},
      "episodes": [{"seed", "return", "steps", "cause"}, ...],
      "summary": {"mean_return", "median_return", "std_return", "min_return", "max_return", "mean_steps", "causes",
@@ -31,6 +31,8 @@ FORMAT = "chopperscape-bench/results/1"
 KINDS = ("builtin", "recipe", "onnx", "sb3", "callable")
 CAUSES = ("bird", "fuel", "truncated")
 ACTIONS = ("greedy", "sampled", "as-is")
+#: The longest row name (`policy.name`, `bench evaluate --name`).
+MAX_NAME = 80
 
 
 class ResultsError(ValueError):
@@ -56,6 +58,18 @@ def summary(episodes: list[dict[str, Any]], mode: str) -> dict[str, Any]:
         "causes": {k: causes[k] for k in sorted(causes)},
         "score": round(mean / protocol.max_return(mode), 6),
     }
+
+
+def check_name(name: Any) -> str:
+    """A leaderboard row's name (optional `policy.name`): 1 to 80 printable characters, no `|` (it is a table cell),
+    not only spaces. `ValueError` saying what is allowed."""
+    ok = isinstance(name, str) and 0 < len(name) <= MAX_NAME and name.strip() != ""
+    if not (ok and name.isprintable() and "|" not in name):
+        raise ResultsError(
+            f"`policy.name` {name!r}: a row's name is 1 to {MAX_NAME} printable characters without '|', "
+            "e.g. 'fast (PPO, 3 M decisions)'"
+        )
+    return name
 
 
 def _need(cond: bool, what: str) -> None:
@@ -89,6 +103,8 @@ def check(doc: Any) -> dict[str, Any]:
     pol = doc["policy"]
     _need(isinstance(pol, dict) and pol.get("kind") in KINDS, f"`policy.kind` must be one of {', '.join(KINDS)}")
     _need(isinstance(pol.get("source"), str) and pol["source"] != "", "`policy.source` must be a non-empty string")
+    if "name" in pol:
+        check_name(pol["name"])
     sha = pol.get("sha256")
     _need(sha is None or (isinstance(sha, str) and len(sha) == 64), "`policy.sha256` must be 64 hex digits or null")
     _need(pol.get("actions") in ACTIONS, f"`policy.actions` must be one of {', '.join(ACTIONS)}")
