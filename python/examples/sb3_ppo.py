@@ -3,6 +3,7 @@
     python python/examples/sb3_ppo.py --minutes 30 --out runs/sb3-default                # SB3's defaults
     python python/examples/sb3_ppo.py --steps 15000000 --out runs/sb3-tuned --tuned      # the recipe's settings in SB3
     python python/examples/sb3_ppo.py --pixels 42 --steps 2000000 --out runs/sb3-pixels42  # CnnPolicy on frames
+    python python/examples/sb3_ppo.py --preset fast --mode sticky-v0 --out runs/sb3-fast  # the fast preset in SB3
 
 `--pixels SIZE` is what a pixel-RL user tries first: SB3's `CnnPolicy` (the Nature CNN) with RL Zoo's Atari PPO
 settings (8 envs × 128 steps, 4 epochs of batches of 256, learning rate 2.5e-4 and clip 0.1 both annealed linearly,
@@ -13,7 +14,8 @@ obs_type='"grayscale"' --option obs_size=[42,42] --option frame_stack=4 --option
 `--tuned` uses what ``chopperscape.learn.train`` uses, read from :class:`chopperscape.learn.recipe.Recipe`'s defaults
 (γ, GAE λ, 64 envs × 256 steps, 8 minibatches, 4 epochs, clip, entropy and value coefficients, gradient clip,
 [128, 128] tanh, the learning rate annealed linearly to 5 % over ``--steps``, observations and rewards normalised by
-``VecNormalize``). ``--steps`` is the budget every schedule follows; ``--minutes`` only stops a run early.
+``VecNormalize``). ``--preset fast`` does the same with the fast preset's settings, frame skip 4 and its 3 M decisions.
+``--steps`` is the budget every schedule follows; ``--minutes`` only stops a run early.
 The model is saved as ``OUT/model.zip`` (and, with
 ``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
 ``python -m chopperscape.learn.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
@@ -36,7 +38,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from chopperscape import MODES
 from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings, save_normalization
 from chopperscape.learn import progress
-from chopperscape.learn.recipe import Recipe
+from chopperscape.learn.recipe import PRESETS, Recipe
 
 
 class ProgressCsv(BaseCallback):
@@ -84,6 +86,12 @@ def main() -> None:
     )
     p.add_argument("--tuned", action="store_true", help="the recipe's hyperparameters instead of SB3's defaults")
     p.add_argument(
+        "--preset",
+        choices=("features", "fast"),
+        default=None,
+        help="a features preset's hyperparameters, frame skip and step budget (--tuned is --preset features)",
+    )
+    p.add_argument(
         "--pixels", type=int, default=None, metavar="SIZE", help="CnnPolicy on SIZE x SIZE frames, RL Zoo's Atari PPO"
     )
     p.add_argument(
@@ -92,13 +100,18 @@ def main() -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--torch-threads", type=int, default=1, help="torch threads (1 is fastest for these small MLPs)")
     a = p.parse_args()
+    if a.tuned and a.preset not in (None, "features"):
+        p.error(f"--tuned is --preset features, not --preset {a.preset}: give one")
+    preset = "features" if a.tuned else a.preset
+    if preset is not None and a.steps is None:
+        a.steps = PRESETS[preset].get("total_steps")
     if a.steps is None and a.minutes is None:
         a.minutes = 30.0
     steps = a.steps or 10**10
     torch.set_num_threads(a.torch_threads)
     rules = {} if a.mode is None else {"mode": a.mode}
-    if a.tuned and a.pixels is not None:
-        p.error("--tuned is the features recipe's settings; --pixels has RL Zoo's Atari settings: give one")
+    if preset is not None and a.pixels is not None:
+        p.error("--tuned and --preset are the features recipe's settings; --pixels has RL Zoo's Atari settings")
     if a.pixels is not None and not 36 <= a.pixels <= 600:
         p.error(f"--pixels {a.pixels}: the Nature CNN needs frames of 36 to 600 pixels a side")
     if a.pixels is not None:
@@ -120,9 +133,13 @@ def main() -> None:
             seed=a.seed,
             device="cpu",
         )
-    elif a.tuned:
-        r = Recipe()
-        env = VecNormalize(ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features", **rules), gamma=r.gamma)
+    elif preset is not None:
+        r = Recipe(**{k: v for k, v in PRESETS[preset].items() if k != "total_steps"})
+        try:
+            venv = ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features", **r.env_options, **rules)
+        except ValueError as e:  # a mode whose frame skip is not the preset's
+            p.error(f"--preset {preset}: {e}")
+        env = VecNormalize(venv, gamma=r.gamma)
         lr = r.learning_rate
         model = PPO(
             "MlpPolicy",
@@ -138,7 +155,7 @@ def main() -> None:
     a.out.mkdir(parents=True, exist_ok=True)
     model.learn(steps, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
     model.save(a.out / "model.zip")
-    if a.tuned:
+    if preset is not None:
         save_normalization(env, a.out / "vecnormalize.json")
         env.save(str(a.out / "vecnormalize.pkl"))
 

@@ -126,7 +126,7 @@ def test_sb3_cnn_policy_on_stacked_frames_is_read_back_without_pickle_by_evaluat
 
 
 @needs_sb3
-@pytest.mark.parametrize("args", [["--pixels", "42", "--mode", "sticky-v0"], ["--tuned", "--mode", "full-v0"]])
+@pytest.mark.parametrize("args", [["--pixels", "42", "--mode", "sticky-v0"], ["--preset", "fast", "--mode", "full-v0"]])
 def test_the_sb3_example_trains_on_a_mode_and_refuses_what_contradicts_it(args, tmp_path):
     """`python/examples/sb3_ppo.py` (the documented SB3 rows): a few steps on a mode's rules save a model; a frame
     skip the mode does not have is named, exit status 2, nothing written."""
