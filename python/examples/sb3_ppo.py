@@ -42,13 +42,15 @@ from chopperscape.learn.recipe import PRESETS, Recipe
 
 
 class ProgressCsv(BaseCallback):
-    """Writes one CSV row per rollout (last 100 episodes) and stops at the time budget."""
+    """Writes one CSV row per rollout (last 100 episodes), at most one every `every` env steps (DQN's rollouts are
+    4 steps long), and stops at the time budget."""
 
-    def __init__(self, path: Path, minutes: float | None):
+    def __init__(self, path: Path, minutes: float | None, every: int = 0):
         super().__init__()
         self.path, self.deadline = path, float("inf") if minutes is None else minutes * 60
         self.start = time.monotonic()
         self.episodes = 0
+        self.every, self.last = every, -every
 
     def _on_training_start(self) -> None:
         self.writer = progress.Writer(self.path, progress.RETURNS)
@@ -58,8 +60,9 @@ class ProgressCsv(BaseCallback):
         return time.monotonic() - self.start < self.deadline
 
     def _on_rollout_end(self) -> None:
-        eps = list(self.model.ep_info_buffer)
-        if eps:
+        eps = list(self.model.ep_info_buffer or [])
+        if eps and self.num_timesteps - self.last >= self.every:
+            self.last = self.num_timesteps
             r = np.array([e["r"] for e in eps])
             length = np.array([e["l"] for e in eps])
             self.writer.row(

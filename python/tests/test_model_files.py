@@ -250,3 +250,49 @@ def test_an_sb3_model_for_other_observations_is_a_clear_error(sb3_model, tmp_pat
     assert evaluate(path, "--episodes", "1", "--option", "obs_type=features", "--option", "frame_stack=2") == 2
     err = capsys.readouterr().err
     assert "(46,)" in err and "(92,)" in err and "Traceback" not in err, err
+
+
+@needs_sb3
+def test_an_sb3_dqn_from_the_example_is_read_without_unpickling(tmp_path, capsys):
+    """`python/examples/sb3_dqn.py` saves a DQN that `evaluate` and the bench read as data: its pickled training
+    settings (the exploration schedule, the training frequency) are replaced, a crafted one runs no code, no replay
+    buffer is allocated, and it plays as SB3's own unpickling load plays it. A DQN cannot sample: refused."""
+    import subprocess
+    import sys
+
+    from chopperscape.bench import evaluate as bench
+
+    out = tmp_path / "dqn"
+    script = ROOT / "python" / "examples" / "sb3_dqn.py"
+    done = subprocess.run(
+        [sys.executable, str(script), "--mode", "sticky-v0", "--steps", "300", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    args = ["--episodes", "2", "--option", "obs_type=features", "--option", "frame_skip=4"]
+    assert evaluate(out / "model.zip", *args) == 0
+    safe = json.loads(capsys.readouterr().out)
+    assert evaluate(out / "model.zip", *args, "--trust-pickle") == 0
+    trusted = json.loads(capsys.readouterr().out)
+    assert (safe["mean_return"], safe["mean_steps"]) == (trusted["mean_return"], trusted["mean_steps"])
+    assert evaluate(out / "model.zip", *args, "--stochastic") == 2
+    assert "is a DQN: its policy is greedy" in capsys.readouterr().err
+    doc = bench.run(str(out / "model.zip"), "sticky-v0", {"obs_type": "features"}, train_seeds=(0, 1))
+    assert doc["policy"]["kind"] == "sb3" and doc["policy"]["recipe"] == {"algorithm": "DQN"}
+    # A crafted pickle where DQN keeps its training frequency: replaced, never unpickled.
+    marker = tmp_path / "ran"
+    with zipfile.ZipFile(out / "model.zip") as z:
+        files = {n: z.read(n) for n in z.namelist()}
+    data = json.loads(files["data"])
+    evil = base64.b64encode(pickle.dumps(Payload(marker))).decode()
+    data["train_freq"] = {":type:": "x", ":serialized:": evil}
+    files["data"] = json.dumps(data).encode()
+    crafted = tmp_path / "crafted" / "model.zip"
+    crafted.parent.mkdir()
+    with zipfile.ZipFile(crafted, "w") as z:
+        for n, b in files.items():
+            z.writestr(n, b)
+    assert evaluate(crafted, *args) == 0
+    assert not marker.exists(), "loading an SB3 DQN ran code from it"

@@ -7,7 +7,7 @@
 - a built-in policy's name (`random`, `heuristic`, `noop`, …; a file of that name is given as `./NAME`);
 - a `chopperscape.learn.train` model (`.pt`, read with `torch.load(weights_only=True)`);
 - an exported policy (`.onnx`, from `python -m chopperscape.learn.export`; run by onnxruntime);
-- a Stable-Baselines3 PPO `.zip` (give the observation it was trained on: `--option obs_type=features`);
+- a Stable-Baselines3 PPO or DQN `.zip` (give the observation it was trained on: `--option obs_type=features`);
 - a Python callable by import path, `pkg.mod:func`, called as `func(obs_batch) -> actions` on a batch of
   observations (`--option` chooses them; features by default).
 
@@ -112,7 +112,9 @@ def load(
 
         torch.manual_seed(run)
         act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle)
-        info["kind"] = "sb3"
+        from ..integrations.sb3 import algorithm
+
+        info.update(kind="sb3", recipe={"algorithm": algorithm(path)})
         return Loaded(act, played, info)
     from ..learn.model import load as load_model
 

@@ -236,10 +236,21 @@ class ChopperScapeVecEnv(VecEnv):
 
 #: The format of `save_normalization`'s file.
 NORMALIZATION_FORMAT = "chopperscape-vecnormalize/1"
-#: SB3's policy classes a model may name (module `stable_baselines3.common.policies`).
-_POLICIES = ("ActorCriticPolicy", "ActorCriticCnnPolicy", "MultiInputActorCriticPolicy")
+#: The SB3 algorithms whose models are read, by the module of their policy classes: the algorithm's class name and
+#: the policy classes a model of it may name (PPO's live in `stable_baselines3.common.policies`, DQN's in its own).
+ALGORITHMS: dict[str, tuple[str, tuple[str, ...]]] = {
+    "stable_baselines3.common.policies": (
+        "PPO",
+        ("ActorCriticPolicy", "ActorCriticCnnPolicy", "MultiInputActorCriticPolicy"),
+    ),
+    "stable_baselines3.dqn.policies": ("DQN", ("DQNPolicy", "CnnPolicy", "MultiInputPolicy")),
+}
 #: Modules whose classes a model's `policy_kwargs` may name (activations, optimisers, SB3's feature extractors).
 _KWARG_MODULES = ("torch.nn.modules.activation", "torch.optim.", "stable_baselines3.common.torch_layers")
+
+
+#: Pickled settings that only training reads (schedules, DQN's training frequency): replaced by constants.
+_TRAINING_ONLY = ("learning_rate", "lr_schedule", "clip_range", "clip_range_vf", "exploration_schedule", "train_freq")
 
 
 def _untrusted(path: Path, what: str) -> ValueError:
@@ -273,16 +284,8 @@ def policy_space(space: gym.Space) -> gym.Space:
     return space
 
 
-def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> dict[str, Any]:
-    """`custom_objects` for `PPO.load(path, custom_objects=...)` that replace every pickled setting of an SB3
-    model, so that loading it runs no code from the file: the spaces are this env's (`env_options`; the stored
-    shape is checked against them), the policy class is SB3's own one the file names, schedules are constants
-    (they matter only for training), `policy_kwargs` are rebuilt from their readable copy (classes only from
-    torch's activations and optimisers and SB3's feature extractors), and pickled training state (buffers, last
-    observations) is dropped. `ValueError` for a file that is not an SB3 model or names anything else."""
-    from stable_baselines3.common import policies
-
-    path = Path(path)
+def _model_data(path: Path) -> dict[str, Any]:
+    """The readable settings (`data`, JSON) of an SB3 model file; `ValueError` for a file that is not one."""
     try:
         with zipfile.ZipFile(path) as z:
             data = json.loads(z.read("data"))
@@ -290,6 +293,39 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
         raise ValueError(f"{path} is not a Stable-Baselines3 model (a zip with its `data` settings): {e}") from None
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a Stable-Baselines3 model: its `data` is not a JSON object")
+    return data
+
+
+def _policy_class(path: Path, data: dict[str, Any]) -> tuple[str, str, str]:
+    """`(algorithm, module, class)` of the policy class an SB3 model names in its readable copy (no unpickling);
+    `ValueError` if it is not one of `ALGORITHMS`'."""
+    item = data.get("policy_class")
+    item = item if isinstance(item, dict) else {}
+    m = re.match(r"<function (\w+)\.__init__ at ", str(item.get("__init__", "")))
+    module = item.get("__module__")
+    if module not in ALGORITHMS or m is None or m.group(1) not in ALGORITHMS[module][1]:
+        raise _untrusted(path, "its policy class is not one of Stable-Baselines3's PPO or DQN policies")
+    return ALGORITHMS[module][0], module, m.group(1)
+
+
+def algorithm(path: str | os.PathLike) -> str:
+    """The SB3 algorithm (`"PPO"`, `"DQN"`) a model file was saved by, read from its settings without unpickling;
+    `ValueError` for a file that is not an SB3 model of one of `ALGORITHMS`."""
+    path = Path(path)
+    return _policy_class(path, _model_data(path))[0]
+
+
+def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> dict[str, Any]:
+    """`custom_objects` for `PPO.load` or `DQN.load(path, custom_objects=...)` that replace every pickled setting of
+    an SB3 model, so that loading it runs no code from the file: the spaces are this env's (`env_options`; the stored
+    shape is checked against them), the policy class is SB3's own one the file names, schedules are constants
+    (they matter only for training), `policy_kwargs` are rebuilt from their readable copy (classes only from
+    torch's activations and optimisers and SB3's feature extractors), and pickled training state (buffers, last
+    observations) is dropped. `ValueError` for a file that is not an SB3 model or names anything else."""
+    import importlib
+
+    path = Path(path)
+    data = _model_data(path)
     venv = VectorEnv(1, num_threads=1, max_episode_steps=None, **env_options)
     obs_space, act_space = policy_space(venv.single_observation_space), venv.single_action_space
     venv.close()
@@ -308,14 +344,11 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
         elif key == "action_space":
             custom[key] = act_space
         elif key == "policy_class":
-            m = re.match(r"<function (\w+)\.__init__ at ", str(item.get("__init__", "")))
-            if item.get("__module__") != policies.__name__ or m is None or m.group(1) not in _POLICIES:
-                raise _untrusted(path, "its policy class is not one of Stable-Baselines3's own")
-            custom[key] = getattr(policies, m.group(1))
-        elif key in ("learning_rate", "lr_schedule", "clip_range", "clip_range_vf"):
-            custom[key] = (lambda _: 0.0) if key == "lr_schedule" else (0.2 if key == "clip_range" else None)
-            if key == "learning_rate":
-                custom[key] = 0.0
+            _, module, name = _policy_class(path, data)
+            custom[key] = getattr(importlib.import_module(module), name)
+        elif key in _TRAINING_ONLY:
+            constant = {"learning_rate": 0.0, "clip_range": 0.2, "clip_range_vf": None, "train_freq": (1, "step")}
+            custom[key] = constant[key] if key in constant else (lambda _: 0.0)
         elif key == "policy_kwargs":
             kwargs = {}
             for name, value in item.items():
@@ -330,6 +363,8 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
             custom[key] = kwargs
         else:
             custom[key] = None  # training state (buffers, last observations, episode statistics)
+    if "buffer_size" in data:  # an off-policy model (DQN): playing needs no replay buffer, so none is allocated
+        custom["buffer_size"] = 1
     return custom
 
 

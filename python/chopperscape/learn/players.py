@@ -99,7 +99,8 @@ def _describe(options: dict[str, Any]) -> str:
 
 
 def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pickle: bool = False):
-    """`(act, env_options)` for a Stable-Baselines3 PPO `.zip`, with the observation normalisation saved beside it.
+    """`(act, env_options)` for a Stable-Baselines3 PPO or DQN `.zip` (the algorithm read from its settings), with
+    the observation normalisation saved beside it.
 
     SB3 stores the model's settings as JSON, but some of them (the spaces, the policy class, schedules) as
     cloudpickle, which runs code when loaded; its weights are read with `weights_only=True`. Unless
@@ -107,7 +108,7 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
     classes give (named by the readable copy SB3 stores beside it), and a setting that cannot be is refused.
     Normalisation: `vecnormalize.json` (`chopperscape.integrations.sb3.save_normalization`) is read as data; SB3's
     `vecnormalize.pkl` is a pickle, read only with `trust_pickle`."""
-    from stable_baselines3 import PPO
+    import stable_baselines3
 
     from ..integrations import sb3
 
@@ -116,12 +117,16 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
     env_options = {"keep_dim": True, **env_options}
     # As SB3's policy holds them: channel-last frames (a frame stack) are transposed to channels first.
     shape = tuple(sb3.policy_space(observation_space(env_options)).shape or ())
+    algorithm = sb3.algorithm(path)
+    if stochastic and algorithm == "DQN":
+        raise ValueError(f"{what} is a DQN: its policy is greedy (argmax of Q), it cannot sample (drop --stochastic)")
+    cls = getattr(stable_baselines3, algorithm)
     if trust_pickle:
-        model = PPO.load(path, device="cpu")
+        model = cls.load(path, device="cpu")
     else:
         custom = sb3.safe_load_objects(path, env_options)
         try:
-            model = PPO.load(path, device="cpu", custom_objects=custom)
+            model = cls.load(path, device="cpu", custom_objects=custom)
         except (RuntimeError, KeyError, TypeError, AttributeError) as e:
             raise ValueError(
                 f"{what} could not be read without unpickling ({str(e).splitlines()[0]}); pass "
