@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The leaderboard's trained rows (docs/site/bench.md): ROW trained on MODE's rules with training seeds 0-9 (or
+# SEEDS), one at a time, then each model evaluated by the bench's protocol under the row's name. Results:
+# docs/bench/results/MODE.ROW.seedN.json (or $RESULTS/). MODE is sticky-v0 or full-v0 (frame skip 4).
+#   fast     the fast preset, `train --preset fast --mode MODE`: about 2 CPU minutes a seed to train, 1 to evaluate
+#   sb3-ppo  SB3's PPO with the fast preset's settings, `python/examples/sb3_ppo.py --preset fast`: about as long
+#   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 1,000,000)
+#     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+PY=${PYTHON:-python}
+row=${1:?a row: fast, sb3-ppo or sb3-dqn}
+mode=${2:?a mode: sticky-v0 or full-v0}
+runs=${3:?a folder for the runs}
+shift 3
+seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
+steps=${STEPS:-1000000}
+case $row in
+  fast) name="fast preset: PPO on features, 3 M decisions" ;;
+  sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
+  sb3-dqn) name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
+  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn" >&2; exit 2 ;;
+esac
+for s in ${seeds[*]}; do
+  out=$runs/seed-$s
+  case $row in
+    fast)
+      "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$out" --force >/dev/null
+      model=$out/model.pt; given=() ;;
+    sb3-ppo)
+      "$PY" python/examples/sb3_ppo.py --preset fast --mode "$mode" --seed "$s" --out "$out"
+      model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:128") ;;
+    sb3-dqn)
+      "$PY" python/examples/sb3_dqn.py --mode "$mode" --steps "$steps" --seed "$s" --out "$out"
+      model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:1") ;;
+  esac
+  "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
+    --out "${RESULTS:-docs/bench/results}/$mode.$row.seed$s.json"
+done
