@@ -39,9 +39,9 @@ def with_mode(name: str, options: dict[str, Any]) -> dict[str, Any]:
     """`options` (typed keyword options) with mode `name`'s rules set: the options the mode lists are added, every
     other rules option keeps its default. `ValueError` naming each given option that contradicts the mode (the
     core's rule for `mode=`, said before anything runs), and what the mode fixes it to."""
-    rules = mode_options(name)
-    del rules["mode"]
+    rules = {k: v for k, v in mode_options(name).items() if k != "mode"}
     wrong = [f"{k}={options[k]!r} (the mode's: {v!r})" for k, v in rules.items() if k in options and options[k] != v]
     if wrong:
         raise ValueError(f"options contradict mode {name!r}: {', '.join(wrong)}")
-    return {**options, **{k: rules[k] for k in mode(name)["options"]}}
+    # The options the mode lists are set (typed); every other rules option keeps its default.
+    return {**options, **{k: v for k, v in rules.items() if k in mode(name)["options"]}}

@@ -111,10 +111,11 @@ def load(
         import torch
 
         torch.manual_seed(run)
-        act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle)
         from ..integrations.sb3 import algorithm
 
-        info.update(kind="sb3", recipe={"algorithm": algorithm(path)})
+        algo = algorithm(path)
+        act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle, algo)
+        info.update(kind="sb3", recipe={"algorithm": algo})
         return Loaded(act, played, info)
     from ..learn.model import load as load_model
 

@@ -249,8 +249,15 @@ ALGORITHMS: dict[str, tuple[str, tuple[str, ...]]] = {
 _KWARG_MODULES = ("torch.nn.modules.activation", "torch.optim.", "stable_baselines3.common.torch_layers")
 
 
-#: Pickled settings that only training reads (schedules, DQN's training frequency): replaced by constants.
-_TRAINING_ONLY = ("learning_rate", "lr_schedule", "clip_range", "clip_range_vf", "exploration_schedule", "train_freq")
+#: Pickled settings that only training reads (schedules, DQN's training frequency), and the constants that replace them.
+_TRAINING_ONLY: dict[str, Any] = {
+    "learning_rate": 0.0,
+    "lr_schedule": lambda _: 0.0,
+    "clip_range": 0.2,
+    "clip_range_vf": None,
+    "exploration_schedule": lambda _: 0.0,
+    "train_freq": (1, "step"),
+}
 
 
 def _untrusted(path: Path, what: str) -> ValueError:
@@ -347,8 +354,7 @@ def safe_load_objects(path: str | os.PathLike, env_options: dict[str, Any]) -> d
             _, module, name = _policy_class(path, data)
             custom[key] = getattr(importlib.import_module(module), name)
         elif key in _TRAINING_ONLY:
-            constant = {"learning_rate": 0.0, "clip_range": 0.2, "clip_range_vf": None, "train_freq": (1, "step")}
-            custom[key] = constant[key] if key in constant else (lambda _: 0.0)
+            custom[key] = _TRAINING_ONLY[key]
         elif key == "policy_kwargs":
             kwargs = {}
             for name, value in item.items():

@@ -98,7 +98,9 @@ def _describe(options: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v!r}" for k, v in options.items()) or "the defaults"
 
 
-def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pickle: bool = False):
+def load_sb3(
+    path: Path, stochastic: bool, env_options: dict[str, Any], trust_pickle: bool = False, algorithm: str | None = None
+):
     """`(act, env_options)` for a Stable-Baselines3 PPO or DQN `.zip` (the algorithm read from its settings), with
     the observation normalisation saved beside it.
 
@@ -107,7 +109,8 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
     `trust_pickle`, no pickle is loaded: every pickled setting is replaced by what this env and SB3's own
     classes give (named by the readable copy SB3 stores beside it), and a setting that cannot be is refused.
     Normalisation: `vecnormalize.json` (`chopperscape.integrations.sb3.save_normalization`) is read as data; SB3's
-    `vecnormalize.pkl` is a pickle, read only with `trust_pickle`."""
+    `vecnormalize.pkl` is a pickle, read only with `trust_pickle`. `algorithm` is the file's
+    (`integrations.sb3.algorithm`) where the caller has read it already."""
     import stable_baselines3
 
     from ..integrations import sb3
@@ -117,7 +120,7 @@ def load_sb3(path: Path, stochastic: bool, env_options: dict[str, Any], trust_pi
     env_options = {"keep_dim": True, **env_options}
     # As SB3's policy holds them: channel-last frames (a frame stack) are transposed to channels first.
     shape = tuple(sb3.policy_space(observation_space(env_options)).shape or ())
-    algorithm = sb3.algorithm(path)
+    algorithm = algorithm or sb3.algorithm(path)
     if stochastic and algorithm == "DQN":
         raise ValueError(f"{what} is a DQN: its policy is greedy (argmax of Q), it cannot sample (drop --stochastic)")
     cls = getattr(stable_baselines3, algorithm)
