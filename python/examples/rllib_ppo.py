@@ -27,6 +27,7 @@ import math
 import os
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 #: Episodes the mean and std of each row are taken over.
@@ -100,6 +101,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--restore", default=None, help="start from a checkpoint saved by --checkpoint")
     p.add_argument("--summary", default=None, help="write a JSON summary to this file at the end")
     p.add_argument(
+        "--export",
+        default=None,
+        metavar="FILE.onnx",
+        help="write the trained policy as a ChopperScape policy file (the format of chopperscape.learn.export, with "
+        "its training seeds) for `python -m chopperscape.bench evaluate`, the command line and the page",
+    )
+    p.add_argument(
         "--eval-episodes",
         type=int,
         default=0,
@@ -147,6 +155,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.hidden = [int(h) for h in args.hidden.split(",")]
     except ValueError:
         p.error(f"--hidden must be comma-separated integers such as 64,64, got {args.hidden!r}")
+    if args.export is not None:
+        from chopperscape.learn.export import check_out
+
+        try:
+            check_out(Path(args.export), force=True)
+        except ValueError as e:
+            p.error(str(e).replace("--out", "--export"))
     if args.restore is not None and not os.path.isdir(args.restore):
         p.error(f"--restore {args.restore!r} is not a directory (give one written by --checkpoint)")
     return args
@@ -234,24 +249,15 @@ def build_config(args: argparse.Namespace):
     )
 
 
-def observation_filter_state(env_runner: Any) -> dict:
-    """The MeanStdFilter connector's state on a runner (runs in the runner); {} without one."""
-    for connector in env_runner._env_to_module.connectors:
-        if type(connector).__name__ == "MeanStdFilter":
-            return connector.get_state()
-    return {}
-
-
 def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
     """Greedy episodes of the trained module on seeds `--eval-seed`, +1, ..., played and summarised by
     `chopperscape.learn.evaluate` (the same JSON as `python -m chopperscape.learn.evaluate`), with the
     observations normalised by the runners' filter statistics, frozen."""
     import numpy as np
     import torch
-    from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
 
     import chopperscape
-    from chopperscape.integrations.rllib import float_pixels
+    from chopperscape.integrations.rllib import float_pixels, observation_filter
     from chopperscape.learn import episodes as chopper_episodes
 
     module = algo.get_module()
@@ -260,13 +266,9 @@ def evaluate(algo: Any, args: argparse.Namespace) -> dict[str, Any]:
     probe.close()
     normalise = None
     if args.env_config.get("obs_type") == "features":
-        states = [s for s in algo.env_runner_group.foreach_env_runner(observation_filter_state) if s]
-        if not states:
+        normalise = observation_filter(algo, space)
+        if normalise is None:
             raise SystemExit("error: no runner has the observation filter's statistics to evaluate with")
-        obs_filter = MeanStdFilter()  # (given the space in its constructor, it reads its clip before setting it)
-        obs_filter.input_observation_space = space
-        obs_filter.set_state(states[0])
-        normalise = obs_filter._filters[None]
 
     def act(obs: np.ndarray, _envs: Any) -> np.ndarray:
         x = normalise(obs, update=False) if normalise is not None else float_pixels(obs, len(space.shape))
@@ -407,6 +409,22 @@ def main(argv: list[str] | None = None) -> int:
             with open(args.eval_out, "w") as f:
                 f.write(text + "\n")
         print(text, flush=True)
+    if args.export:
+        from chopperscape.integrations.rllib import export_onnx, runner_seeds, seed_ranges
+
+        seeds = [s for runner in group.foreach_env_runner(runner_seeds, local_env_runner=True) for s in runner]
+        try:
+            summary["export"] = export_onnx(
+                algo,
+                args.env_config,
+                args.export,
+                train_seeds=seed_ranges(seeds),
+                source_sha256=summary["weights_sha256"],
+                force=True,
+            )
+        except (ValueError, OSError, RuntimeError) as e:
+            raise SystemExit(f"error: --export {args.export!r}: {e}") from None
+        print(json.dumps(summary["export"]), flush=True)
     if args.checkpoint:
         summary["checkpoint"] = algo.save_to_path(os.path.abspath(args.checkpoint))
     if args.summary:

@@ -178,6 +178,42 @@ def test_callable_and_onnx_policies(tmp_path):
     assert onnx["episodes"] == pt["episodes"]  # the export acts as the model
 
 
+def test_an_onnx_policys_training_seeds_are_checked(tmp_path):
+    onnx = pytest.importorskip("onnx")
+    pytest.importorskip("onnxruntime")
+
+    def exported(seeds: str | None, name: str) -> str:
+        graph = onnx.load(str(ROOT / "models" / "ppo-features.onnx"))
+        props = {p.key: p.value for p in graph.metadata_props if p.key != "train_seeds"}
+        if seeds is not None:
+            props["train_seeds"] = seeds
+        del graph.metadata_props[:]
+        for key, value in props.items():
+            graph.metadata_props.add(key=key, value=value)
+        onnx.save(graph, str(tmp_path / name))
+        return str(tmp_path / name)
+
+    # A file of 0.1.0 says nothing of its seeds; one range is recorded; several (RLlib's runners) stay in the recipe.
+    assert evaluate.load(exported(None, "old.onnx"), "v0").info["train_seeds"] is None
+    assert evaluate.load(exported("[[0, 64]]", "one.onnx"), "v0").info["train_seeds"] == [0, 64]
+    runners = evaluate.load(exported("[[1048576, 16], [2097152, 16]]", "runners.onnx"), "sticky-v0").info
+    assert runners["train_seeds"] is None
+    assert json.loads(runners["recipe"]["train_seeds"]) == [[1048576, 16], [2097152, 16]]
+    for seeds, message in [
+        ("[[0, 64], [999990, 16]]", "its training seeds 999990..1000005 overlap the evaluation seeds"),
+        ("[[0, 0]]", "count 0 must be >= 1"),
+        ("{}", "train_seeds metadata must be JSON [[first, count], ...]"),
+        ("[[0]]", "train_seeds metadata must be JSON [[first, count], ...]"),
+        ("[[0, true]]", "train_seeds metadata must be JSON [[first, count], ...]"),
+        ("[[0, 1.5]]", "train_seeds metadata must be JSON [[first, count], ...]"),
+        ("seeds", "train_seeds metadata must be JSON [[first, count], ...]"),
+    ]:
+        path = exported(seeds, "bad.onnx")
+        with pytest.raises(ValueError) as err:
+            evaluate.load(path, "v0")
+        assert message in str(err.value) and path in str(err.value), (seeds, str(err.value))
+
+
 def test_an_sb3_zip_plays_the_mode_it_is_given(tmp_path):
     pytest.importorskip("stable_baselines3")
     from stable_baselines3 import PPO

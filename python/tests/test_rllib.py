@@ -346,6 +346,8 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         "77",
         "--eval-out",
         str(first_eval),
+        "--export",
+        str(tmp_path / "policy.onnx"),
     )
     assert len(rows) == 2 == summary["iterations"]
     steps = [int(r["env_steps"]) for r in rows]
@@ -410,3 +412,23 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     )
     assert run.returncode == 0, run.stderr[-4000:]
     assert json.loads(again.read_text()) == evaluated
+
+    # --export: a policy file the bench reads (with both runners' seed ranges), playing those episodes as the run did.
+    assert summary["export"]["checked"] is True and summary["export"]["max_abs_diff"] <= 1e-5
+    import onnxruntime
+
+    from chopperscape.bench import evaluate as bench_evaluate
+    from chopperscape.learn import episodes
+
+    loaded = bench_evaluate.load(str(tmp_path / "policy.onnx"), "sticky-v0")
+    assert json.loads(loaded.info["recipe"]["train_seeds"]) == [[(3 + w) * K, 4] for w in (1, 2)]
+    assert json.loads(loaded.info["recipe"]["env_options"]) == {"max_fuel": 40}
+    assert loaded.info["recipe"]["source_sha256"] == summary["weights_sha256"]
+    session = onnxruntime.InferenceSession(str(tmp_path / "policy.onnx"), providers=["CPUExecutionProvider"])
+    played = episodes.play_episodes(
+        lambda obs, _envs: session.run(None, {"obs": obs})[0].argmax(-1),
+        3,
+        77,
+        {"obs_type": "features", "max_fuel": 40},
+    )
+    assert episodes.summary(played)["mean_return"] == evaluated["mean_return"]

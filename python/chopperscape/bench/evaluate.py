@@ -34,6 +34,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import __version__, _atomic, modes
+from ..learn.export import TRAIN_SEEDS
 from ..policies import NAMES, VectorPolicy
 from ..vector import VectorEnv
 from . import protocol, results
@@ -147,6 +148,11 @@ def _onnx(path: Path, options: dict, rules: dict, stochastic: bool, run: int, in
         trained = json.loads(meta.get("env_options", "{}"))
     except ValueError:
         raise ValueError(f"policy file {str(path)!r}: its env_options metadata is not JSON") from None
+    ranges = _train_seeds(meta.get(TRAIN_SEEDS), path)
+    for first, count in ranges:
+        protocol.check_training_seeds(first, count, f"policy file {str(path)!r}: its training")
+    if len(ranges) == 1:  # several ranges (one per RLlib runner) stay in the recorded metadata only
+        info["train_seeds"] = list(ranges[0])
     obs = {k: v for k, v in trained.items() if k in OBS_OPTIONS}
     obs = {"obs_type": meta.get("obs_type", "features"), **obs, **options}
     if "obs_size" in obs and isinstance(obs["obs_size"], list):
@@ -164,6 +170,27 @@ def _onnx(path: Path, options: dict, rules: dict, stochastic: bool, run: int, in
         return (p.cumsum(-1) > gen.random((len(p), 1))).argmax(-1)
 
     return Loaded(act, {**obs, **rules}, info)
+
+
+def _train_seeds(text: str | None, path: Path) -> list[tuple[int, int]]:
+    """The `train_seeds` metadata of an exported policy, `[[first, count], ...]` (none when absent)."""
+    if text is None:
+        return []
+    try:
+        value = json.loads(text)
+    except ValueError:
+        value = None
+
+    def whole(x: Any) -> bool:
+        return isinstance(x, int) and not isinstance(x, bool)
+
+    if not isinstance(value, list) or not all(
+        isinstance(pair, list) and len(pair) == 2 and all(whole(x) for x in pair) for pair in value
+    ):
+        raise ValueError(
+            f"policy file {str(path)!r}: its train_seeds metadata must be JSON [[first, count], ...], got {text[:80]!r}"
+        )
+    return [(first, count) for first, count in value]
 
 
 def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:

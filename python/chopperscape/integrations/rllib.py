@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -54,6 +55,7 @@ try:
     from ray.rllib.connectors.env_to_module.observation_preprocessor import SingleAgentObservationPreprocessor
     from ray.rllib.connectors.learner import GeneralAdvantageEstimation
     from ray.rllib.core.columns import Columns
+    from ray.rllib.utils.filter import SMALL_NUMBER
     from ray.tune.registry import register_env
 except ImportError as e:  # pragma: no cover - depends on the installation
     raise ImportError(
@@ -68,9 +70,12 @@ __all__ = [
     "ReturnScaling",
     "check_env_config",
     "env_creator",
+    "export_onnx",
     "float_pixels",
+    "observation_filter",
     "register",
     "runner_seeds",
+    "seed_ranges",
 ]
 
 #: The name this module registers with RLlib (the same as Gymnasium's id).
@@ -285,6 +290,131 @@ def _find(env: Any, kind: type) -> Any:
             return env
         env = getattr(env, "env", None)
     return None
+
+
+def observation_filter_state(env_runner: Any) -> dict:
+    """The MeanStdFilter connector's state on a runner (runs in the runner); {} without one."""
+    for connector in env_runner._env_to_module.connectors:
+        if type(connector).__name__ == "MeanStdFilter":
+            return connector.get_state()
+    return {}
+
+
+def observation_filter(algo: Any, space: gym.spaces.Space) -> Any:
+    """The observation filter of `algo`'s runners (RLlib's `MeanStdFilter` connector, synced across them) as a
+    `ray.rllib.utils.filter.MeanStdFilter` over `space`, to apply with `update=False`; `None` when the runners
+    have none (pixels). `ValueError` when the runners cannot be reached."""
+    from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
+
+    states = algo.env_runner_group.foreach_env_runner(observation_filter_state, local_env_runner=True)
+    states = [s for s in states if s]
+    if not states:
+        return None
+    connector = MeanStdFilter()  # (given the space in its constructor, it reads its clip before setting it)
+    connector.input_observation_space = space
+    connector.set_state(states[0])
+    return connector._filters[None]
+
+
+def export_onnx(
+    algo: Any,
+    env_config: Mapping[str, Any],
+    out: str | os.PathLike[str],
+    *,
+    train_seeds: list[tuple[int, int]],
+    source_sha256: str,
+    force: bool = False,
+) -> dict[str, Any]:
+    """Writes the greedy policy of a trained PPO `algo` to `out` as a ChopperScape policy file, the format of
+    `python -m chopperscape.learn.export` (read by `python -m chopperscape.bench evaluate`, the command line, the
+    Rust crate and the page): the env's raw observation batch to the logits of the five actions, with what the
+    runners apply first in the graph (the observation filter's frozen mean and std for features; the [0, 1]
+    scaling for pixels). `train_seeds`: the reset-seed ranges `(first, count)` the runners trained on (written to
+    the file, checked by the bench); `source_sha256`: the digest of the weights. The export's logits are compared
+    with the module's on 1,000 observations recorded by playing it (`RuntimeError` beyond the tolerance); the file
+    is written whole or not at all. Returns what was written and checked. `ValueError` for a bad `out`."""
+    import torch
+
+    from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic
+    from ..learn import export
+    from ..learn.episodes import observation_shape
+    from ..modes import with_mode
+
+    out = Path(out)
+    export.check_out(out, force)
+    config = dict(env_config)
+    obs_type = config.pop("obs_type", "features")
+    name = config.pop("mode", None)
+    options = {k: v for k, v in config.items() if k not in ("max_episode_steps", *VECTOR_ONLY)}
+    if name is not None:
+        options = with_mode(name, options)
+    shape = observation_shape({"obs_type": obs_type, **options})
+    space = gym.spaces.Box(-np.inf, np.inf, shape, np.float32)
+    norm = observation_filter(algo, space) if obs_type == "features" else None
+    if obs_type == "features" and norm is None:
+        raise ValueError("no runner has the observation filter's statistics to export with")
+    module = algo.get_module()
+
+    class Policy(torch.nn.Module):
+        def __init__(self) -> None:
+            super().__init__()
+            self.module = module
+            if norm is not None:
+                stats = norm.running_stats
+                mean = np.asarray(stats.mean) if norm.demean else np.zeros(shape)
+                scale = 1.0 / (np.asarray(stats.std) + SMALL_NUMBER) if norm.destd else np.ones(shape)
+                self.register_buffer("mean", torch.as_tensor(mean, dtype=torch.float32))
+                self.register_buffer("scale", torch.as_tensor(scale, dtype=torch.float32))
+                self.clip = float(norm.clip) if norm.clip else None
+
+        def forward(self, obs: torch.Tensor) -> torch.Tensor:
+            if norm is not None:
+                x = (obs - self.get_buffer("mean")) * self.get_buffer("scale")
+                x = torch.clamp(x, -self.clip, self.clip) if self.clip is not None else x
+            else:  # as FloatPixels: [0, 1], a channel axis for a plain grayscale frame
+                x = obs.float() / 255.0 if obs.dtype == torch.uint8 else obs.float()
+                x = x.unsqueeze(-1) if len(shape) == 2 else x
+            return self.module.forward_inference({"obs": x})["action_dist_inputs"]
+
+    policy = Policy().eval()
+    dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
+    props = export.metadata(
+        obs_type,
+        shape,
+        options,
+        source_sha256=source_sha256,
+        features_version=FEATURES_VERSION,
+        pixels_version=PIXELS_VERSION,
+        train_seeds=train_seeds,
+    )
+
+    def logits(obs: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return policy(torch.from_numpy(obs)).numpy()
+
+    data = export.to_onnx(policy, torch.zeros((2, *shape), dtype=dtype), props)
+    obs = export.record_observations(logits, obs_type, options)
+    result: dict[str, Any] = {"out": str(out), "obs_type": obs_type, "obs_shape": list(shape), "bytes": len(data)}
+    result.update(export.compare_logits(data, obs, logits(obs)))
+    try:
+        _atomic.write_bytes(out, data)
+    except OSError as e:
+        raise export.ExportWriteError(f"cannot write {str(out)!r}: {e.strerror or e}; nothing was written") from None
+    return result
+
+
+def seed_ranges(seeds: list[int | None]) -> list[tuple[int, int]]:
+    """The seeds of `runner_seeds` (over all runners) as sorted ranges `(first, count)` of consecutive seeds;
+    `ValueError` if an env was reset without a seed (its games are then unknown)."""
+    if any(s is None for s in seeds):
+        raise ValueError("an env was reset without a seed: its training seeds are unknown (give the run a --seed)")
+    ranges: list[list[int]] = []
+    for s in sorted({int(s) for s in seeds if s is not None}):
+        if ranges and ranges[-1][0] + ranges[-1][1] == s:
+            ranges[-1][1] += 1
+        else:
+            ranges.append([s, 1])
+    return [(first, count) for first, count in ranges]
 
 
 register()

@@ -22,6 +22,8 @@ The file's ``metadata_props`` say what the policy takes (the Rust loader refuses
     features_version  the features layout it learned (chopperscape.FEATURES_VERSION)
     pixels_version    the pixel layout it learned (chopperscape.PIXELS_VERSION)
     source_sha256     the SHA-256 of MODEL
+    train_seeds       the reset seeds it was trained on, JSON ranges [[first, count], ...]: optional (files
+                      exported by 0.1.0 lack it; `python/examples/rllib_ppo.py --export` writes one per runner)
 
 The export is built and checked in memory before anything is written: its logits must equal torch's within 1e-5 on
 1,000 observations recorded by playing the env with the policy (with ``onnxruntime`` when it is installed;
@@ -41,7 +43,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -55,6 +57,9 @@ CHECK_OBSERVATIONS = 1000
 CHECK_TOLERANCE = 1e-5
 #: ONNX operator set of the export: within what tract is tested against (9 to 18).
 OPSET = 17
+#: The optional `metadata_props` key of the reset-seed ranges a policy was trained on, JSON `[[first, count], ...]`:
+#: `python -m chopperscape.bench evaluate` refuses a policy whose ranges reach the evaluation seeds.
+TRAIN_SEEDS = "train_seeds"
 
 
 def load(path: Path):
@@ -105,21 +110,22 @@ def _policy_module(agent, norm, model_shape: tuple[int, ...], env_shape: tuple[i
 
 
 def record_observations(
-    payload: dict[str, Any], agent, norm, options: dict[str, Any], n: int = CHECK_OBSERVATIONS, seed: int = 0
+    logits: Callable[[np.ndarray], np.ndarray],
+    obs_type: str,
+    options: dict[str, Any],
+    n: int = CHECK_OBSERVATIONS,
+    seed: int = 0,
 ) -> np.ndarray:
-    """`n` observations met by playing the env greedily with the policy (8 envs, seeds `seed + i`, autoreset)."""
-    import torch
-
+    """`n` raw observations met by playing the env greedily by `logits` (a raw observation batch to the actions'
+    logits), 8 envs from seeds `seed + i`, autoreset."""
     from ..vector import VectorEnv
 
-    envs = VectorEnv(8, num_threads=1, obs_type=payload["recipe"]["obs_type"], **options)
+    envs = VectorEnv(8, num_threads=1, obs_type=obs_type, **options)
     try:
         obs, _ = envs.reset(seed=seed)
         seen = [obs.copy()]
         while sum(len(o) for o in seen) < n:
-            with torch.no_grad():
-                action = agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload))))
-            obs, *_ = envs.step(action.argmax(-1).numpy().astype(np.int64))
+            obs, *_ = envs.step(np.asarray(logits(obs)).argmax(-1).astype(np.int64))
             seen.append(obs.copy())
     finally:
         envs.close()
@@ -131,13 +137,9 @@ def payload_shape(payload: dict[str, Any]) -> tuple[int, ...]:
     return tuple(payload.get("obs_shape") or (payload["obs_dim"],))
 
 
-def export(model: Path, out: Path, force: bool = False, check: bool = True) -> dict[str, Any]:
-    """Writes the ONNX export of `model` to `out` (atomically: a temporary file beside it, renamed), then checks
-    it (see the module docs). Returns what the command line prints. `ValueError` for a bad model or `out`;
-    `RuntimeError` when the check fails (the file is removed)."""
-    import onnx
-    import torch
-
+def check_out(out: Path, force: bool) -> None:
+    """`ValueError` naming `--out` when the ONNX file cannot go there: its folder is missing or a file, it is a
+    folder, or it exists and `force` is not given."""
     out_dir = out.parent if str(out.parent) else Path(".")
     if not out_dir.is_dir():
         why = "is not a folder" if os.path.lexists(out_dir) else "does not exist"
@@ -146,32 +148,43 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         raise ValueError(f"--out {str(out)!r} is a folder: give the ONNX file to write (NAME.onnx)")
     if os.path.lexists(out) and not force:
         raise ValueError(f"--out {str(out)!r} exists: pass --force to replace it")
-    if os.path.lexists(out) and os.path.lexists(model) and os.path.samefile(out, model):
-        raise ValueError(f"--out {str(out)!r} is the model file itself: give another name (NAME.onnx)")
-    payload, agent, norm, options, env_shape = load(model)
-    obs_type = payload["recipe"]["obs_type"]
-    module = _policy_module(agent, norm, payload_shape(payload), env_shape)
-    # The env's element type: uint8 frames (rgb, grayscale), float32 otherwise (features, rgb_float).
-    dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
-    example = torch.zeros((2, *env_shape), dtype=dtype)
-    pixels = obs_type != "features"
-    from .. import FEATURES_VERSION, PIXELS_VERSION
 
-    versions = {
-        "features_version": int(payload.get("features_version", 2 if not pixels else FEATURES_VERSION)),
-        "pixels_version": int(payload.get("pixels_version", 1 if pixels else PIXELS_VERSION)),
-    }
-    metadata = {
+
+def metadata(
+    obs_type: str,
+    env_shape: tuple[int, ...],
+    options: dict[str, Any],
+    *,
+    source_sha256: str,
+    features_version: int,
+    pixels_version: int,
+    train_seeds: list[tuple[int, int]] | None = None,
+) -> dict[str, str]:
+    """The `metadata_props` of an exported policy (the module's docs; `crates/policy/src/metadata.rs` reads
+    them). `train_seeds`: the reset-seed ranges `(first, count)` it was trained on, when known."""
+    props = {
         "format": FORMAT,
         "obs_type": obs_type,
         "obs_shape": json.dumps(list(env_shape)),
         "env_options": json.dumps(options, sort_keys=True),
-        **{k: str(v) for k, v in versions.items()},
-        "source_sha256": _atomic.sha256(model),
+        "features_version": str(features_version),
+        "pixels_version": str(pixels_version),
+        "source_sha256": source_sha256,
     }
+    if train_seeds is not None:
+        props[TRAIN_SEEDS] = json.dumps([[int(first), int(count)] for first, count in train_seeds])
+    return props
+
+
+def to_onnx(module, example, props: dict[str, str]) -> bytes:
+    """`module` (raw observation batch to logits) as a checked ONNX graph, traced on `example`: input `obs`,
+    output `logits`, the batch axis free, `props` as its `metadata_props`."""
+    import onnx
+    import torch
+
     # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
     # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
-    # Built in memory and checked there; the file is written once, whole (`_atomic`), or not at all.
+    # Built in memory and checked there; the caller writes it once, whole (`_atomic`), or not at all.
     buffer = io.BytesIO()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
@@ -187,11 +200,58 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         )
     graph = onnx.load_from_string(buffer.getvalue())
     del graph.metadata_props[:]
-    for key, value in metadata.items():
+    for key, value in props.items():
         graph.metadata_props.add(key=key, value=value)
     graph.producer_name = "chopperscape.learn.export"
     onnx.checker.check_model(graph)
-    data = graph.SerializeToString()
+    return graph.SerializeToString()
+
+
+def compare_logits(onnx_model: bytes, obs: np.ndarray, expected: np.ndarray) -> dict[str, Any]:
+    """Runs the export on `obs` and compares its logits with `expected`; `RuntimeError` when they differ by more
+    than `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime."""
+    try:
+        import onnxruntime
+    except ImportError:
+        return {"checked": False, "why": "onnxruntime is not installed (pip install onnxruntime)"}
+    session = onnxruntime.InferenceSession(onnx_model, providers=["CPUExecutionProvider"])
+    got = session.run(["logits"], {"obs": obs})[0]
+    diff = float(np.max(np.abs(got - expected)))
+    if not diff <= CHECK_TOLERANCE:
+        raise RuntimeError(f"the export's logits differ from torch's by {diff:.3g} (allowed {CHECK_TOLERANCE})")
+    return {"checked": True, "observations": len(obs), "max_abs_diff": diff}
+
+
+def export(model: Path, out: Path, force: bool = False, check: bool = True) -> dict[str, Any]:
+    """Writes the ONNX export of `model` to `out` (atomically: a temporary file beside it, renamed), then checks
+    it (see the module docs). Returns what the command line prints. `ValueError` for a bad model or `out`;
+    `RuntimeError` when the check fails (the file is removed)."""
+    import torch
+
+    check_out(out, force)
+    if os.path.lexists(out) and os.path.lexists(model) and os.path.samefile(out, model):
+        raise ValueError(f"--out {str(out)!r} is the model file itself: give another name (NAME.onnx)")
+    payload, agent, norm, options, env_shape = load(model)
+    obs_type = payload["recipe"]["obs_type"]
+    module = _policy_module(agent, norm, payload_shape(payload), env_shape)
+    # The env's element type: uint8 frames (rgb, grayscale), float32 otherwise (features, rgb_float).
+    dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
+    example = torch.zeros((2, *env_shape), dtype=dtype)
+    pixels = obs_type != "features"
+    from .. import FEATURES_VERSION, PIXELS_VERSION
+
+    seed, num_envs = payload["recipe"].get("seed"), payload["recipe"].get("num_envs")
+    props = metadata(
+        obs_type,
+        env_shape,
+        options,
+        source_sha256=_atomic.sha256(model),
+        # A file without versions predates them: features v2, pixel layout 1.
+        features_version=int(payload.get("features_version", 2 if not pixels else FEATURES_VERSION)),
+        pixels_version=int(payload.get("pixels_version", 1 if pixels else PIXELS_VERSION)),
+        train_seeds=[(seed, num_envs)] if isinstance(seed, int) and isinstance(num_envs, int) else None,
+    )
+    data = to_onnx(module, example, props)
     result: dict[str, Any] = {
         "model": str(model),
         "out": str(out),
@@ -213,23 +273,20 @@ class ExportWriteError(OSError):
 
 
 def check_export(onnx_model: bytes, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:
-    """Compares the export's logits with torch's on `CHECK_OBSERVATIONS` recorded observations; `RuntimeError`
-    when they differ by more than `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime."""
-    try:
-        import onnxruntime
-    except ImportError:
-        return {"checked": False, "why": "onnxruntime is not installed (pip install onnxruntime)"}
+    """Compares the export's logits with torch's on `CHECK_OBSERVATIONS` observations recorded by playing the
+    policy (:func:`compare_logits`)."""
+    import importlib.util
+
+    if importlib.util.find_spec("onnxruntime") is None:
+        return compare_logits(onnx_model, np.zeros(0), np.zeros(0))  # says that the check is skipped, and why
     import torch
 
-    obs = record_observations(payload, agent, norm, options)
-    with torch.no_grad():
-        expected = agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload)))).numpy()
-    session = onnxruntime.InferenceSession(onnx_model, providers=["CPUExecutionProvider"])
-    got = session.run(["logits"], {"obs": obs})[0]
-    diff = float(np.max(np.abs(got - expected)))
-    if not diff <= CHECK_TOLERANCE:
-        raise RuntimeError(f"the export's logits differ from torch's by {diff:.3g} (allowed {CHECK_TOLERANCE})")
-    return {"checked": True, "observations": len(obs), "max_abs_diff": diff}
+    def logits(obs: np.ndarray) -> np.ndarray:
+        with torch.no_grad():
+            return agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload)))).numpy()
+
+    obs = record_observations(logits, payload["recipe"]["obs_type"], options)
+    return compare_logits(onnx_model, obs, logits(obs))
 
 
 def main(argv: list[str] | None = None) -> int:
