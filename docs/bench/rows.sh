@@ -5,6 +5,8 @@
 #   fast     the fast preset, `train --preset fast --mode MODE`: about 2 CPU minutes a seed to train, 1 to evaluate
 #   sb3-ppo  SB3's PPO with the fast preset's settings, `python/examples/sb3_ppo.py --preset fast`: about as long
 #   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 1,000,000)
+#   rllib-ppo  RLlib's PPO with the fast preset's settings, `python/examples/rllib_ppo.py` (one runner of 128 games,
+#            run by $RLLIB_PYTHON, default .venv-rllib/bin/python), exported with --export and evaluated from the ONNX
 #     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -19,7 +21,8 @@ case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
   sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
   sb3-dqn) name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
-  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn" >&2; exit 2 ;;
+  rllib-ppo) name="RLlib PPO, the fast preset's settings, 3 M decisions" ;;
+  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn, rllib-ppo" >&2; exit 2 ;;
 esac
 for s in ${seeds[*]}; do
   out=$runs/seed-$s
@@ -33,6 +36,15 @@ for s in ${seeds[*]}; do
     sb3-dqn)
       "$PY" python/examples/sb3_dqn.py --mode "$mode" --steps "$steps" --seed "$s" --out "$out"
       model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:1") ;;
+    rllib-ppo)
+      # The fast preset's settings in RLlib's terms: 128 games, batches of 128 x 128, 2 epochs of 4 minibatches,
+      # lr 1e-3 falling to 0 at 3 M decisions, gamma 0.998, lambda 0.98, entropy 0.02, 128 x 128 tanh MLPs.
+      mkdir -p "$out"
+      "${RLLIB_PYTHON:-.venv-rllib/bin/python}" python/examples/rllib_ppo.py --env-runners 1 --envs-per-runner 128 \
+        --train-batch-size 16384 --minibatch-size 4096 --epochs 2 --lr 1e-3 --gamma 0.998 --lambda 0.98 \
+        --entropy 0.02 --steps 3000000 --seed "$s" --env-config "{\"mode\": \"$mode\"}" \
+        --csv "$out/progress.csv" --summary "$out/summary.json" --export "$out/model.onnx" >/dev/null
+      model=$out/model.onnx; given=() ;;
   esac
   "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
     --out "${RESULTS:-docs/bench/results}/$mode.$row.seed$s.json"

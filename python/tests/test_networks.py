@@ -17,7 +17,7 @@ def test_networks_refuse_observations_they_cannot_take():
         model.build_agent("small", (46,))
     with pytest.raises(ValueError, match="too small"):
         model.build_agent("nature", (16, 16, 4))
-    with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature'"):
+    with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature', 'small-split'"):
         model.build_agent("resnet", (84, 84, 4))
 
 
@@ -56,6 +56,36 @@ def test_cnn_act_runs_the_trunk_once_and_matches_both_heads(network, shape):
     before = xf.clone()
     torch.testing.assert_close(agent.act(xf, actions)[1], logp.detach(), rtol=0, atol=1e-6)
     assert torch.equal(xf, before)
+
+
+@needs_torch
+def test_small_split_gives_the_critic_a_trunk_of_its_own(tmp_path):
+    """ "small-split": the critic's trunk is its own (other weights, no shared parameter), so the value loss's
+    gradient never reaches the actor's; `act` runs each trunk once and matches the heads."""
+    import torch
+
+    from chopperscape.learn import model
+
+    torch.manual_seed(0)
+    agent = model.build_agent("small-split", (42, 42, 4))
+    actor_trunk, critic_trunk = agent.actor[0], agent.critic[0]
+    assert not {id(p) for p in actor_trunk.parameters()} & {id(p) for p in critic_trunk.parameters()}
+    assert not torch.equal(actor_trunk[1].weight, critic_trunk[1].weight)
+    shared = model.build_agent("small", (42, 42, 4))
+    assert sum(p.numel() for p in agent.parameters()) == sum(p.numel() for p in shared.parameters()) + sum(
+        p.numel() for p in shared.actor[0].parameters()
+    )
+    x = torch.randint(0, 256, (5, 42, 42, 4), dtype=torch.uint8)
+    actions = torch.tensor([0, 1, 2, 3, 4])
+    _, logp, _, value = agent.act(x, actions)
+    torch.testing.assert_close(logp, torch.distributions.Categorical(logits=agent.actor(x)).log_prob(actions))
+    torch.testing.assert_close(value, agent.value(x))
+    value.sum().backward()
+    assert all(p.grad is None for p in actor_trunk.parameters())
+    assert all(p.grad is not None and p.grad.abs().sum() > 0 for p in critic_trunk.parameters())
+    # With the shared trunk the same loss does reach it.
+    shared.act(x, actions)[3].sum().backward()
+    assert all(p.grad is not None for p in shared.actor[0].parameters())
 
 
 @needs_torch

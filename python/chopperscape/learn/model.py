@@ -8,6 +8,7 @@ cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it 
 
 from __future__ import annotations
 
+import copy
 import math
 import pickle
 import re
@@ -184,11 +185,15 @@ CNNS = {
 
 
 class CnnAgent(ActorCritic):
-    """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy).
-    `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
+    """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy), or,
+    for a "-split" network, each on a trunk of its own (the layout of PPG's separate value network, Cobbe et al.
+    2021: the value loss no longer shapes the policy's features). `actor(obs)` gives the logits and `critic(obs)`
+    the value, as for :class:`Agent`."""
 
     def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
         super().__init__()
+        self.split = network.endswith("-split")
+        network = network.removesuffix("-split")
         h, w = obs_shape[:2]
         stack = obs_shape[2] if len(obs_shape) == 3 else 1
         name = "small-42" if network == "small" and min(h, w) < 64 else network
@@ -209,17 +214,23 @@ class CnnAgent(ActorCritic):
                 )
         flat = channels * size[0] * size[1]
         trunk = nn.Sequential(*layers, _layer(nn.Linear(flat, width)), nn.ReLU())
-        # `actor.0` and `critic.0` are the one trunk; these names are the checkpoint format's.
+        # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.
         self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
-        self.critic = nn.Sequential(trunk, _layer(nn.Linear(width, 1), 1.0))
+        critic_trunk = copy.deepcopy(trunk) if self.split else trunk
+        if self.split:  # its own initial weights, not a copy of the actor's
+            for module in critic_trunk.modules():
+                if isinstance(module, (nn.Conv2d, nn.Linear)):
+                    _layer(module)
+        self.critic = nn.Sequential(critic_trunk, _layer(nn.Linear(width, 1), 1.0))
 
     def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        """`(logits, value, embedding)` from one pass of the shared trunk (`actor(x)` and `critic(x)` each run it:
-        twice the convolutions, forward and backward, for the same numbers), so :meth:`ActorCritic.act` runs it
-        once."""
+        """`(logits, value, embedding)` from one pass of each trunk: with a shared trunk `actor(x)` and `critic(x)`
+        would each run it (twice the convolutions, forward and backward, for the same numbers), so
+        :meth:`ActorCritic.act` runs it once. The embedding is the actor's."""
         actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
         h = actor[0](x)
-        return actor[1](h), critic[1](h).squeeze(-1), h
+        value = critic[1](critic[0](x) if self.split else h)
+        return actor[1](h), value.squeeze(-1), h
 
     @property
     def embedding_width(self) -> int:
@@ -235,8 +246,8 @@ def build_agent(
         if len(obs_shape) != 1:
             raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
         return Agent(int(obs_shape[0]), num_actions, hidden)
-    if network not in ("small", "nature"):
-        raise ValueError(f"invalid network {network!r}: allowed 'auto', 'mlp', 'small', 'nature'")
+    if network not in ("small", "nature", "small-split"):
+        raise ValueError(f"invalid network {network!r}: allowed 'auto', 'mlp', 'small', 'nature', 'small-split'")
     if len(obs_shape) not in (2, 3):
         raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
     return CnnAgent(tuple(obs_shape), num_actions, network, invert_frames)

@@ -125,7 +125,8 @@ class Recipe:
     max_grad_norm: float = 0.5
     hidden: int = 128
     #: The network: "mlp" (features) or a CNN for pixel observations, "small" (Mnih et al. 2013's two
-    #: convolutions) or "nature" (Mnih et al. 2015's three); "auto" picks "mlp" or "small" by obs_type.
+    #: convolutions) or "nature" (Mnih et al. 2015's three), actor and critic on one trunk; "small-split" is "small"
+    #: with a trunk of its own for the critic (twice the convolutions); "auto" picks "mlp" or "small" by obs_type.
     network: str = "auto"
     #: Where the network runs: "cpu", or "cuda" where torch sees a GPU (see docs/learning.md for throughput).
     device: str = "cpu"
@@ -173,7 +174,7 @@ RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
 #: The augmentations `Recipe.augment` names.
 AUGMENTS = ("none", "shift")
 #: The networks `Recipe.network` names.
-NETWORKS = ("auto", "mlp", "small", "nature")
+NETWORKS = ("auto", "mlp", "small", "nature", "small-split")
 
 
 def check_device(device: Any) -> None:
