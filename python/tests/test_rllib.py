@@ -96,6 +96,8 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--eval-episodes", "-1"], "--eval-episodes must be >= 0, got -1"),
         (["--eval-only", "--eval-episodes", "3"], "--eval-only needs --restore DIR and --eval-episodes N >= 1"),
         (["--eval-seed", "-5"], "--eval-seed must be in 0..2**63, got -5"),
+        (["--export", "/no/such/folder/p.onnx"], "--export '/no/such/folder/p.onnx': '/no/such/folder' does not exist"),
+        (["--export", "/"], "--export '/' is a folder: give the ONNX file to write"),
     ],
 )
 def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
