@@ -43,6 +43,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--env-runners", type=int, default=2, help="env runner processes (0: sample in this process)")
     p.add_argument("--envs-per-runner", type=int, default=16, help="games each runner steps as one batch")
     p.add_argument("--cpus-per-runner", type=float, default=1, help="CPUs Ray reserves for each runner")
+    p.add_argument(
+        "--sample-timeout",
+        type=float,
+        default=600.0,
+        help="seconds an iteration waits for its runners' samples (RLlib's default, 60, is too short for a "
+        "large batch on busy cores; default 600)",
+    )
     p.add_argument("--address", default=None, help="Ray cluster to join ('auto', or host:port); default: a local Ray")
     p.add_argument(
         "--minutes",
@@ -126,6 +133,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error(f"--env-runners must be >= 0, got {args.env_runners}")
     if args.envs_per_runner < 1:
         p.error(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
+    if not args.sample_timeout > 0:
+        p.error(f"--sample-timeout must be > 0, got {args.sample_timeout}")
     if args.cpus_per_runner <= 0:
         p.error(f"--cpus-per-runner must be > 0, got {args.cpus_per_runner}")
     if args.minutes is None and args.steps is None and args.iterations is None:
@@ -220,6 +229,7 @@ def build_config(args: argparse.Namespace):
             num_env_runners=args.env_runners,
             num_envs_per_env_runner=args.envs_per_runner,
             num_cpus_per_env_runner=args.cpus_per_runner,
+            sample_timeout_s=args.sample_timeout,
             gym_env_vectorize_mode="vector_entry_point" if args.native else "sync",
             # Features normalised by running mean and std (the filter's state is synced and checkpointed);
             # pixels as floats in [0, 1] with a channel axis, for RLlib's default CNN.
@@ -358,7 +368,9 @@ def main(argv: list[str] | None = None) -> int:
                     window.append((ret, length))
                     episodes_per_runner[runner] += 1
                     episodes += 1
-            env_steps = int(result["env_runners"]["num_env_steps_sampled_lifetime"])
+            # An iteration whose runners returned no samples in time (RLlib warns "No samples returned") reports
+            # no runner metrics: the count stays where it was.
+            env_steps = int(result.get("env_runners", {}).get("num_env_steps_sampled_lifetime", env_steps))
             if window:  # like the recipe, rows start once an episode has finished
                 returns = [r for r, _ in window]
                 mean = sum(returns) / len(returns)

@@ -97,6 +97,7 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--eval-only", "--eval-episodes", "3"], "--eval-only needs --restore DIR and --eval-episodes N >= 1"),
         (["--eval-seed", "-5"], "--eval-seed must be in 0..2**63, got -5"),
         (["--export", "/no/such/folder/p.onnx"], "--export '/no/such/folder/p.onnx': '/no/such/folder' does not exist"),
+        (["--sample-timeout", "0"], "--sample-timeout must be > 0, got 0.0"),
         (["--export", "/"], "--export '/' is a folder: give the ONNX file to write"),
     ],
 )
