@@ -37,13 +37,11 @@ for s in ${seeds[*]}; do
       "$PY" python/examples/sb3_dqn.py --mode "$mode" --steps "$steps" --seed "$s" --out "$out"
       model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:1") ;;
     rllib-ppo)
-      # The fast preset's settings in RLlib's terms: 128 games, batches of 128 x 128, 2 epochs of 4 minibatches,
-      # lr 1e-3 falling to 0 at 3 M decisions, gamma 0.998, lambda 0.98, entropy 0.02, 128 x 128 tanh MLPs.
+      # The fast preset's settings in RLlib's terms (rllib_ppo.py --preset fast reads them from PRESETS).
       mkdir -p "$out"
-      "${RLLIB_PYTHON:-.venv-rllib/bin/python}" python/examples/rllib_ppo.py --env-runners 1 --envs-per-runner 128 \
-        --train-batch-size 16384 --minibatch-size 4096 --epochs 2 --lr 1e-3 --gamma 0.998 --lambda 0.98 \
-        --entropy 0.02 --steps 3000000 --seed "$s" --env-config "{\"mode\": \"$mode\"}" \
-        --csv "$out/progress.csv" --summary "$out/summary.json" --export "$out/model.onnx" >/dev/null
+      "${RLLIB_PYTHON:-.venv-rllib/bin/python}" python/examples/rllib_ppo.py --preset fast --env-runners 1 \
+        --seed "$s" --env-config "{\"mode\": \"$mode\"}" --csv "$out/progress.csv" --summary "$out/summary.json" \
+        --export "$out/model.onnx" >/dev/null
       model=$out/model.onnx; given=() ;;
   esac
   "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \

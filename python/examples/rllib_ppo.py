@@ -30,10 +30,52 @@ import time
 from pathlib import Path
 from typing import Any
 
+from chopperscape.learn.recipe import DEFAULT_STEPS, PRESETS, Recipe
+
 #: Episodes the mean and std of each row are taken over.
 WINDOW = 100
 _FINISHED = "_chopperscape_finished"
 _SAMPLED = "_chopperscape_sampled"
+
+
+#: The example's own settings where neither a flag nor `--preset` gives one.
+DEFAULTS: dict[str, Any] = {
+    "envs_per_runner": 16,
+    "train_batch_size": 8192,
+    "minibatch_size": 1024,
+    "epochs": 4,
+    "lr": 3e-4,
+    "gamma": 0.995,
+    "lambda_": 0.95,
+    "entropy": 0.01,
+    "hidden": "128,128",
+}
+
+
+def preset_settings(name: str, env_runners: int) -> dict[str, Any]:
+    """The settings of `chopperscape.learn.train --preset NAME` (features) as this example's flags: its games split
+    over `env_runners` runners (the driver's, with 0), one batch of games x steps, its minibatches, epochs, lr,
+    gamma, lambda, entropy, two hidden layers of its width, its step budget and env options. `ValueError` if the
+    games do not split evenly."""
+    preset = PRESETS[name]
+    r = Recipe(**{k: v for k, v in preset.items() if k != "total_steps"})
+    runners = max(env_runners, 1)
+    if r.num_envs % runners:
+        raise ValueError(f"--preset {name}: its {r.num_envs} games do not split over {runners} runners evenly")
+    batch = r.num_envs * r.num_steps
+    return {
+        "envs_per_runner": r.num_envs // runners,
+        "train_batch_size": batch,
+        "minibatch_size": batch // r.num_minibatches,
+        "epochs": r.update_epochs,
+        "lr": r.learning_rate,
+        "gamma": r.gamma,
+        "lambda_": r.gae_lambda,
+        "entropy": r.ent_coef,
+        "hidden": f"{r.hidden},{r.hidden}",
+        "steps": preset.get("total_steps", DEFAULT_STEPS),
+        "preset_env_options": dict(r.env_options),
+    }
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -41,7 +83,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
     )
     p.add_argument("--env-runners", type=int, default=2, help="env runner processes (0: sample in this process)")
-    p.add_argument("--envs-per-runner", type=int, default=16, help="games each runner steps as one batch")
+    p.add_argument(
+        "--envs-per-runner", type=int, default=None, help="games each runner steps as one batch (default 16)"
+    )
     p.add_argument("--cpus-per-runner", type=float, default=1, help="CPUs Ray reserves for each runner")
     p.add_argument(
         "--sample-timeout",
@@ -83,20 +127,30 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--obs-type", default="features", help="env option obs_type (default: features)")
     p.add_argument("--env-config", default="{}", help="more env options as JSON, e.g. '{\"alien_prob\": 0.1}'")
     p.add_argument("--seed", type=int, default=0, help="RLlib seed (runner w, env i get distinct game seeds)")
-    p.add_argument("--train-batch-size", type=int, default=8192, help="env steps per training iteration")
-    p.add_argument("--minibatch-size", type=int, default=1024)
-    p.add_argument("--epochs", type=int, default=4, help="passes over each train batch")
-    p.add_argument("--lr", type=float, default=3e-4)
-    p.add_argument("--gamma", type=float, default=0.995)
-    p.add_argument("--lambda", dest="lambda_", type=float, default=0.95)
-    p.add_argument("--entropy", type=float, default=0.01, help="entropy bonus coefficient")
+    p.add_argument(
+        "--preset",
+        choices=sorted(k for k, v in PRESETS.items() if "obs_type" not in v),
+        default=None,
+        help="a features preset of chopperscape.learn.train in RLlib's terms (read from its one declaration, "
+        "chopperscape.learn.recipe.PRESETS): its games (split over the runners), batch, minibatches, epochs, lr, "
+        "gamma, lambda, entropy, hidden width, frame skip and step budget; a flag given here wins",
+    )
+    p.add_argument("--train-batch-size", type=int, default=None, help="env steps per training iteration (8192)")
+    p.add_argument("--minibatch-size", type=int, default=None, help="(default 1024)")
+    p.add_argument("--epochs", type=int, default=None, help="passes over each train batch (default 4)")
+    p.add_argument("--lr", type=float, default=None, help="(default 3e-4)")
+    p.add_argument("--gamma", type=float, default=None, help="(default 0.995)")
+    p.add_argument("--lambda", dest="lambda_", type=float, default=None, help="(default 0.95)")
+    p.add_argument("--entropy", type=float, default=None, help="entropy bonus coefficient (default 0.01)")
     p.add_argument(
         "--no-norm-reward",
         dest="norm_reward",
         action="store_false",
         help="do not scale rewards by the running std of the discounted return",
     )
-    p.add_argument("--hidden", default="128,128", help="hidden layer sizes of the policy and value networks")
+    p.add_argument(
+        "--hidden", default=None, help="hidden layer sizes of the policy and value networks (default 128,128)"
+    )
     p.add_argument(
         "--torch-threads",
         type=int,
@@ -129,6 +183,15 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="no training: evaluate the checkpoint given by --restore (which is a pickle: only your own or trusted)",
     )
     args = p.parse_args(argv)
+    settings = dict(DEFAULTS)
+    if args.preset is not None:
+        try:
+            settings.update(preset_settings(args.preset, args.env_runners))
+        except ValueError as e:
+            p.error(str(e))
+    for name, value in settings.items():
+        if getattr(args, name, None) is None:
+            setattr(args, name, value)
     if args.env_runners < 0:
         p.error(f"--env-runners must be >= 0, got {args.env_runners}")
     if args.envs_per_runner < 1:
@@ -159,7 +222,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error(f"--env-config is not JSON ({e}): give an object such as '{{\"alien_prob\": 0.1}}'")
     if not isinstance(extra, dict):
         p.error("--env-config must be a JSON object such as '{\"alien_prob\": 0.1}'")
-    args.env_config = {"obs_type": args.obs_type, **extra}
+    args.env_config = {"obs_type": args.obs_type, **getattr(args, "preset_env_options", {}), **extra}
     try:
         args.hidden = [int(h) for h in args.hidden.split(",")]
     except ValueError:

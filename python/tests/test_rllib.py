@@ -9,6 +9,7 @@ elsewhere it is skipped.
 from __future__ import annotations
 
 import csv
+import importlib.util
 import json
 import os
 import secrets
@@ -98,6 +99,7 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--eval-seed", "-5"], "--eval-seed must be in 0..2**63, got -5"),
         (["--export", "/no/such/folder/p.onnx"], "--export '/no/such/folder/p.onnx': '/no/such/folder' does not exist"),
         (["--sample-timeout", "0"], "--sample-timeout must be > 0, got 0.0"),
+        (["--preset", "fast", "--env-runners", "3"], "--preset fast: its 128 games do not split over 3 runners evenly"),
         (["--export", "/"], "--export '/' is a folder: give the ONNX file to write"),
     ],
 )
@@ -111,6 +113,27 @@ def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
         env={**os.environ, "RAY_ADDRESS": "127.0.0.1:1"},
     )
     assert run.returncode == 2 and message in run.stderr, run.stderr
+
+
+def test_example_preset_is_the_trainers_preset_in_rllibs_terms():
+    """`--preset fast` reads chopperscape.learn.recipe.PRESETS (one declaration), and a flag given beside it wins."""
+    spec = importlib.util.spec_from_file_location("rllib_ppo_example", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    from chopperscape.learn.recipe import PRESETS, Recipe
+
+    fast = PRESETS["fast"]
+    a = example.parse_args(["--preset", "fast", "--env-runners", "2", "--lr", "5e-4", "--env-config", '{"lives": 2}'])
+    batch = fast["num_envs"] * fast["num_steps"]
+    assert a.envs_per_runner * 2 == fast["num_envs"] and a.train_batch_size == batch
+    assert a.minibatch_size == batch // fast["num_minibatches"] and a.epochs == fast["update_epochs"]
+    assert (a.gamma, a.lambda_, a.steps) == (fast["gamma"], fast["gae_lambda"], fast["total_steps"])
+    assert a.entropy == Recipe().ent_coef and a.hidden == [Recipe().hidden] * 2
+    assert a.lr == 5e-4  # the flag, not the preset's 1e-3
+    assert a.env_config == {"obs_type": "features", **fast["env_options"], "lives": 2}
+    plain = example.parse_args([])
+    assert (plain.envs_per_runner, plain.train_batch_size, plain.lr, plain.steps) == (16, 8192, 3e-4, None)
 
 
 @pytest.mark.parametrize(
