@@ -219,7 +219,9 @@ class CnnAgent(ActorCritic):
         critic_trunk = copy.deepcopy(trunk) if self.split else trunk
         if self.split:  # its own initial weights, not a copy of the actor's
             for module in critic_trunk.modules():
-                if isinstance(module, (nn.Conv2d, nn.Linear)):
+                if isinstance(module, nn.Conv2d):
+                    _layer(module)
+                elif isinstance(module, nn.Linear):
                     _layer(module)
         self.critic = nn.Sequential(critic_trunk, _layer(nn.Linear(width, 1), 1.0))
 
