@@ -335,7 +335,7 @@ def export_onnx(
     is written whole or not at all. Returns what was written and checked. `ValueError` for a bad `out`."""
     import torch
 
-    from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic
+    from .. import FEATURES_VERSION, PIXELS_VERSION
     from ..learn import export
     from ..learn.episodes import observation_shape
     from ..modes import with_mode
@@ -393,13 +393,9 @@ def export_onnx(
             return policy(torch.from_numpy(obs)).numpy()
 
     data = export.to_onnx(policy, torch.zeros((2, *shape), dtype=dtype), props)
-    obs = export.record_observations(logits, obs_type, options)
     result: dict[str, Any] = {"out": str(out), "obs_type": obs_type, "obs_shape": list(shape), "bytes": len(data)}
-    result.update(export.compare_logits(data, obs, logits(obs)))
-    try:
-        _atomic.write_bytes(out, data)
-    except OSError as e:
-        raise export.ExportWriteError(f"cannot write {str(out)!r}: {e.strerror or e}; nothing was written") from None
+    result.update(export.check_logits(data, logits, obs_type, options))
+    export.write(out, data)
     return result
 
 

@@ -207,19 +207,31 @@ def to_onnx(module, example, props: dict[str, str]) -> bytes:
     return graph.SerializeToString()
 
 
-def compare_logits(onnx_model: bytes, obs: np.ndarray, expected: np.ndarray) -> dict[str, Any]:
-    """Runs the export on `obs` and compares its logits with `expected`; `RuntimeError` when they differ by more
-    than `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime."""
+def check_logits(
+    onnx_model: bytes, logits: Callable[[np.ndarray], np.ndarray], obs_type: str, options: dict[str, Any]
+) -> dict[str, Any]:
+    """Compares the export's logits with `logits` (the source policy's, raw observations in) on
+    `CHECK_OBSERVATIONS` observations recorded by playing it; `RuntimeError` when they differ by more than
+    `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime, before anything is played."""
     try:
         import onnxruntime
     except ImportError:
         return {"checked": False, "why": "onnxruntime is not installed (pip install onnxruntime)"}
+    obs = record_observations(logits, obs_type, options)
     session = onnxruntime.InferenceSession(onnx_model, providers=["CPUExecutionProvider"])
     got = session.run(["logits"], {"obs": obs})[0]
-    diff = float(np.max(np.abs(got - expected)))
+    diff = float(np.max(np.abs(got - logits(obs))))
     if not diff <= CHECK_TOLERANCE:
         raise RuntimeError(f"the export's logits differ from torch's by {diff:.3g} (allowed {CHECK_TOLERANCE})")
     return {"checked": True, "observations": len(obs), "max_abs_diff": diff}
+
+
+def write(out: Path, data: bytes) -> None:
+    """Writes the export `data` to `out` whole or not at all; `ExportWriteError` naming `out` otherwise."""
+    try:
+        _atomic.write_bytes(out, data)
+    except OSError as e:
+        raise ExportWriteError(f"cannot write {str(out)!r}: {e.strerror or e}; nothing was written") from None
 
 
 def export(model: Path, out: Path, force: bool = False, check: bool = True) -> dict[str, Any]:
@@ -261,10 +273,7 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
     }
     if check:
         result.update(check_export(data, payload, agent, norm, options))
-    try:
-        _atomic.write_bytes(out, data)
-    except OSError as e:
-        raise ExportWriteError(f"cannot write --out {str(out)!r}: {e.strerror or e}; nothing was written") from None
+    write(out, data)
     return result
 
 
@@ -273,20 +282,14 @@ class ExportWriteError(OSError):
 
 
 def check_export(onnx_model: bytes, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:
-    """Compares the export's logits with torch's on `CHECK_OBSERVATIONS` observations recorded by playing the
-    policy (:func:`compare_logits`)."""
-    import importlib.util
-
-    if importlib.util.find_spec("onnxruntime") is None:
-        return compare_logits(onnx_model, np.zeros(0), np.zeros(0))  # says that the check is skipped, and why
+    """:func:`check_logits` against the model's actor (its normaliser applied first)."""
     import torch
 
     def logits(obs: np.ndarray) -> np.ndarray:
         with torch.no_grad():
             return agent.actor(torch.from_numpy(norm(obs).reshape(len(obs), *payload_shape(payload)))).numpy()
 
-    obs = record_observations(logits, payload["recipe"]["obs_type"], options)
-    return compare_logits(onnx_model, obs, logits(obs))
+    return check_logits(onnx_model, logits, payload["recipe"]["obs_type"], options)
 
 
 def main(argv: list[str] | None = None) -> int:

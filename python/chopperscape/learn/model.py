@@ -8,7 +8,6 @@ cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it 
 
 from __future__ import annotations
 
-import copy
 import math
 import pickle
 import re
@@ -32,7 +31,7 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
 from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic, _core, _signals
 from .._checks import regular_file
 from .._cli import ENV_OPTIONS
-from .recipe import MAX_MODEL_BYTES, RESERVED_OPTIONS, Recipe, network_of
+from .recipe import MAX_MODEL_BYTES, NETWORKS, RESERVED_OPTIONS, Recipe, network_of
 
 #: The checkpoint format this module writes and reads.
 FORMAT = "chopperscape-ppo/1"
@@ -198,12 +197,6 @@ class CnnAgent(ActorCritic):
         stack = obs_shape[2] if len(obs_shape) == 3 else 1
         name = "small-42" if network == "small" and min(h, w) < 64 else network
         convs, width = CNNS[name]
-        layers: list[nn.Module] = [Frames(invert_frames)]
-        channels = stack
-        for out, kernel, stride in convs:
-            layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
-            channels = out
-        layers.append(nn.Flatten())
         size = [h, w]
         for _, kernel, stride in convs:
             size = [(d - kernel) // stride + 1 for d in size]
@@ -212,17 +205,20 @@ class CnnAgent(ActorCritic):
                     f"frames of {h}×{w} are too small for the {network!r} network (at least 36×36 for 'nature', "
                     "16×16 for 'small')"
                 )
-        flat = channels * size[0] * size[1]
-        trunk = nn.Sequential(*layers, _layer(nn.Linear(flat, width)), nn.ReLU())
+        flat = convs[-1][0] * size[0] * size[1]
+
+        def make_trunk() -> nn.Sequential:
+            layers: list[nn.Module] = [Frames(invert_frames)]
+            channels = stack
+            for out, kernel, stride in convs:
+                layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
+                channels = out
+            return nn.Sequential(*layers, nn.Flatten(), _layer(nn.Linear(flat, width)), nn.ReLU())
+
+        trunk = make_trunk()
         # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.
         self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
-        critic_trunk = copy.deepcopy(trunk) if self.split else trunk
-        if self.split:  # its own initial weights, not a copy of the actor's
-            for module in critic_trunk.modules():
-                if isinstance(module, nn.Conv2d):
-                    _layer(module)
-                elif isinstance(module, nn.Linear):
-                    _layer(module)
+        critic_trunk = make_trunk() if self.split else trunk  # a trunk of its own: its own initial weights
         self.critic = nn.Sequential(critic_trunk, _layer(nn.Linear(width, 1), 1.0))
 
     def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
@@ -248,8 +244,8 @@ def build_agent(
         if len(obs_shape) != 1:
             raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
         return Agent(int(obs_shape[0]), num_actions, hidden)
-    if network not in ("small", "nature", "small-split"):
-        raise ValueError(f"invalid network {network!r}: allowed 'auto', 'mlp', 'small', 'nature', 'small-split'")
+    if network not in NETWORKS or network == "auto":
+        raise ValueError(f"invalid network {network!r}: allowed {', '.join(map(repr, NETWORKS))}")
     if len(obs_shape) not in (2, 3):
         raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
     return CnnAgent(tuple(obs_shape), num_actions, network, invert_frames)
