@@ -3,7 +3,7 @@
     .venv/bin/python python/bench_train.py [--steps 131072] [--case features ...] [--device cpu] [--smoke]
 
 For each case it trains with the case's preset (``features``: the features recipe; ``fast``: ``--preset fast``;
-``pixels``: ``--preset pixels``, a small CNN on 84×84×4 frames) for ``--steps`` env steps, timing every phase of the
+``pixels``: ``--preset pixels``, a small CNN on 42×42×4 frames) for ``--steps`` env steps, timing every phase of the
 loop (:mod:`chopperscape.learn.phases`: env, observation normalisation, rollout forward, bookkeeping, GAE, update,
 logging), and prints per phase the wall time per env step and its share, beside the phase's floor: the same work
 with no Python in between (the env stepping the whole batch natively; one forward of the network over a whole

@@ -33,7 +33,7 @@ quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
   "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
 cp web/index.html web/main.js web/style.css "$out/"
 # The trained agents the page offers ("Watch: trained agent", the "Agent" menu): the exports of
-# models/ppo-features.pt and models/ppo-pixels.pt.
+# models/ppo-features.pt and models/ppo-pixels.pt (frames alone).
 mkdir -p "$out/models"
 cp models/ppo-features.onnx models/ppo-pixels.onnx "$out/models/"
 rm -rf web/dist

@@ -16,8 +16,8 @@ const DIRECTIONS = {
 };
 const CAUSES = { bird: "Hit by a bird", fuel: "Out of fuel" };
 // The trained agents, exported by `python -m chopperscape.learn.export` and served beside the page: the features
-// MLP (`models/ppo-features.pt`) and the pixel CNN (`models/ppo-pixels.pt`, which flies on the 84 × 84 frames of
-// the layout it learned). The "Agent" menu picks one.
+// MLP (`models/ppo-features.pt`) and the pixel CNN (`models/ppo-pixels.pt`, trained on frames alone, which flies on
+// the 42 × 42 agent-view frames it learned). The "Agent" menu picks one.
 const AGENT_URLS = { features: "models/ppo-features.onnx", pixels: "models/ppo-pixels.onnx" };
 
 const $ = (id) => document.getElementById(id);

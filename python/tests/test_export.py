@@ -25,6 +25,8 @@ MODEL = ROOT / "models" / "ppo-features.pt"
 EXPORT = ROOT / "models" / "ppo-features.onnx"
 PIXEL_MODEL = ROOT / "models" / "ppo-pixels.pt"
 PIXEL_EXPORT = ROOT / "models" / "ppo-pixels.onnx"
+TEACHER_PIXEL_MODEL = ROOT / "models" / "ppo-pixels-teacher.pt"
+TEACHER_PIXEL_EXPORT = ROOT / "models" / "ppo-pixels-teacher.onnx"
 
 
 def export(*args) -> int:
@@ -40,8 +42,8 @@ def evaluate(*args) -> int:
 
 
 def make_pixel_model(path: pathlib.Path) -> None:
-    """The pixel recipe's CNN, untrained (torch seed 0), reading plain frames as 0.1.0's models do: what
-    `crates/policy/tests/data/pixels-untrained.onnx` is the export of."""
+    """The 84×84 pixel recipe's CNN (`pixels-teacher`), untrained (torch seed 0), reading plain frames as 0.1.0's
+    models do: what `crates/policy/tests/data/pixels-untrained.onnx` is the export of."""
     import torch
 
     from chopperscape.learn import model
@@ -49,7 +51,7 @@ def make_pixel_model(path: pathlib.Path) -> None:
 
     torch.manual_seed(0)
     shape = (84, 84, 4)
-    recipe = Recipe(**PRESETS["pixels"], invert_frames=False)
+    recipe = Recipe(**PRESETS["pixels-teacher"], invert_frames=False)
     model.save(path, model.build_agent("small", shape, 5), model.ObsNormalizer(shape, False), recipe, shape, 0)
 
 
@@ -68,12 +70,20 @@ def metadata(path: pathlib.Path) -> dict[str, str]:
             PIXEL_MODEL,
             PIXEL_EXPORT,
             "grayscale",
+            [42, 42, 4],
+            {"frame_skip": 4, "frame_stack": 4, "obs_size": [42, 42]},
+            "3",
+        ),
+        (
+            TEACHER_PIXEL_MODEL,
+            TEACHER_PIXEL_EXPORT,
+            "grayscale",
             [84, 84, 4],
             {"frame_skip": 4, "frame_stack": 4, "obs_size": [84, 84]},
             "2",
         ),
     ],
-    ids=["features", "pixels"],
+    ids=["features", "pixels", "pixels-teacher"],
 )
 def test_the_committed_export_is_of_the_committed_model(model, exported, obs_type, shape, options, pixels_version):
     meta = metadata(exported)
@@ -84,7 +94,8 @@ def test_the_committed_export_is_of_the_committed_model(model, exported, obs_typ
         shape,
         options,
     )
-    # The pixel policy learned layout 2 (the art), which the loaders show it; a features policy's pixels_version
+    # The teacher-free pixel policy learned layout 3 (the agent view at 42×42), the teacher-guided one layout 2 (the
+    # art), which the loaders show them; a features policy's pixels_version
     # only says which layout was current when it was exported (`python -m chopperscape.learn.export MODEL --force`).
     assert (meta["features_version"], meta["pixels_version"]) == ("2", pixels_version)
 
@@ -157,7 +168,7 @@ def test_bad_models_and_outputs_are_one_line_errors(tmp_path, capsys):
 
 #: (model, its export, warned, evaluate --option, CLI flags) of the comparisons: the trained rules truncated early,
 #: and birds five times as often as in training, so that every episode ends by a bird at a different step; the
-#: pixel policy (84×84×4 frames drawn in Rust, its CNN run by the Rust loader) on its own rules.
+#: pixel policy (42×42×4 agent-view frames drawn in Rust, its CNN run by the Rust loader) on its own rules.
 CASES = [
     (MODEL, EXPORT, [], ["max_episode_steps=400"], ["--max-episode-steps", "400"]),
     (

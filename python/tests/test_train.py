@@ -97,7 +97,8 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     import chopperscape
     from chopperscape.learn import evaluate, model, train
 
-    # The pixel preset at a smoke size: small frames, few envs; the same code path as the full recipe.
+    # The pixel preset (frames alone, the 42×42 agent view) at a smoke size: few envs, few steps; the same code
+    # path as the full recipe. Resuming it is test_resume's.
     out = tmp_path / "px"
     assert (
         train.main(
@@ -113,8 +114,6 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
                 "--out",
                 str(out),
                 "--option",
-                "obs_size=42x42",
-                "--option",
                 "max_fuel=300",
             ]
         )
@@ -123,6 +122,8 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     capsys.readouterr()
     recipe = json.loads((out / "recipe.json").read_text())
     assert recipe["obs_type"] == "grayscale" and recipe["network"] == "small" and recipe["gamma"] == 0.998
+    # No teacher and no auxiliary loss on privileged state: nothing but the frames trains it.
+    assert (recipe["teacher"], recipe["aux_coef"], recipe["gae_lambda"]) == ("", 0.0, 0.98)
     assert recipe["env_options"] == {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4, "max_fuel": 300}
     rows = progress_rows(out / "progress.csv")
     assert rows and all(math.isfinite(float(r[k])) for r in rows for k in ("entropy", "value_loss", "policy_loss"))

@@ -166,4 +166,4 @@ def test_the_large_pixel_preset_is_the_pixel_recipe_with_a_bigger_batch(tmp_path
     assert (large.num_envs, large.num_minibatches, large.env_threads) == (256, 16, 2)
     same = {k: v for k, v in vars(small).items() if k not in ("num_envs", "num_minibatches", "env_threads")}
     assert same == {k: v for k, v in vars(large).items() if k in same}
-    assert large.env_options == {"obs_size": [84, 84], "frame_stack": 4, "frame_skip": 4}
+    assert large.env_options == {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4}

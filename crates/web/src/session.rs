@@ -349,14 +349,15 @@ mod tests {
 
     #[test]
     fn the_pixel_agent_flies_on_its_own_frames_while_the_page_shows_the_full_one() {
-        // `models/ppo-pixels.onnx` learned pixel layout 2 at 84 × 84 × 4, frame skip 4: the session's env draws
-        // those frames (the art, by `render::layout_options`) for the policy and the 600 × 800 frame for the page.
+        // `models/ppo-pixels.onnx` learned pixel layout 3 (the agent view) at 42 × 42 × 4, frame skip 4: the session's
+        // env draws those frames for the policy and the 600 × 800 frame (the art) for the page.
         const PIXELS: &[u8] = include_bytes!("../../../models/ppo-pixels.onnx");
         let mut s = Session::with_policy(PIXELS, [("alien_prob", "0.05")]).unwrap();
         s.reset(3);
         let mut policy = chopperscape_policy::Policy::from_bytes(PIXELS).unwrap();
         let config = policy.config().unwrap();
-        assert_eq!((config.obs_type, config.look), (ObsType::Grayscale, chopperscape::Look::Art));
+        assert_eq!((config.obs_type, config.look), (ObsType::Grayscale, chopperscape::Look::Auto));
+        assert_eq!(config.obs_size, (42, 42));
         let mut env = ChopperScape::new(Config { alien_prob: 0.05, ..config }).unwrap();
         let (mut obs, _) = env.reset(Some(3));
         for _ in 0..40 {

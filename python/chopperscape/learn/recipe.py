@@ -44,15 +44,31 @@ RECIPE_FLAGS = (
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
-#: the command line win. ``pixels`` learns from 84×84 grayscale frames, 4 stacked, each action held for 4 frames
-#: (env steps then count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995
-#: per frame (0.9995⁴ ≈ 0.998), and it keeps its measured entropy 0.01. With GAE λ 0.95 frames alone did not train
-#: it here; at 42×42 with `--gae-lambda 0.98` it learns from frames alone, slowly, on either look (1,545 held out
-#: after 3.2 M decisions: docs/learning.md, "Teacher-free probes"). A features teacher (`--teacher`) of the same
-#: frame skip is the faster, privileged route.
+#: the command line win. ``pixels`` learns from the frames alone (no teacher, no features anywhere in training):
+#: the 42×42 agent view (pixel layout 3), grayscale, 4 stacked, each action held for 4 frames (env steps then
+#: count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995 per frame
+#: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 2 epochs of 4 minibatches at a
+#: learning rate of 1e-3 over a 10 M decision schedule. Chosen by the teacher-free probes (docs/learning.md,
+#: "Teacher-free probes, second round"; p3 there); 84×84 with λ 0.95 did not train from frames alone here.
+#: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
+#: features teacher (`--teacher`), the faster, privileged route.
 PRESETS: dict[str, dict[str, Any]] = {
     "features": {},
     "pixels": {
+        "obs_type": "grayscale",
+        "env_options": {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4},
+        "network": "small",
+        "num_envs": 64,
+        "num_steps": 128,
+        "num_minibatches": 4,
+        "update_epochs": 2,
+        "gamma": 0.998,
+        "gae_lambda": 0.98,
+        "ent_coef": 0.01,
+        "learning_rate": 1e-3,
+        "total_steps": 10_000_000,
+    },
+    "pixels-teacher": {
         "obs_type": "grayscale",
         "env_options": {"obs_size": [84, 84], "frame_stack": 4, "frame_skip": 4},
         "network": "small",
