@@ -5,27 +5,39 @@
 #   fast     the fast preset, `train --preset fast --mode MODE`: about 2 CPU minutes a seed to train, 1 to evaluate
 #   sb3-ppo  SB3's PPO with the fast preset's settings, `python/examples/sb3_ppo.py --preset fast`: about as long
 #   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 1,000,000)
+#   pixels   the pixel preset on frames alone, `train --preset pixels --mode MODE --steps $STEPS` (default
+#            2,000,000 decisions: about 35 minutes of one core a seed); a seed's run resumes from its checkpoint
 #   rllib-ppo  RLlib's PPO with the fast preset's settings, `python/examples/rllib_ppo.py` (one runner of 128 games,
 #            run by $RLLIB_PYTHON, default .venv-rllib/bin/python), exported with --export and evaluated from the ONNX
+# A seed whose results file exists is skipped, so a long row continues where it stopped.
 #     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 PY=${PYTHON:-python}
-row=${1:?a row: fast, sb3-ppo or sb3-dqn}
+row=${1:?a row: fast, sb3-ppo, sb3-dqn, rllib-ppo or pixels}
 mode=${2:?a mode: sticky-v0 or full-v0}
 runs=${3:?a folder for the runs}
 shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
-steps=${STEPS:-1000000}
+case $row in
+  pixels) steps=${STEPS:-2000000} ;;
+  *) steps=${STEPS:-1000000} ;;
+esac
 case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
   sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
   sb3-dqn) name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
   rllib-ppo) name="RLlib PPO, the fast preset's settings, 3 M decisions" ;;
-  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn, rllib-ppo" >&2; exit 2 ;;
+  pixels) name="pixel preset: PPO on 42x42 frames alone, $((steps / 1000)) k decisions" ;;
+  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn, rllib-ppo, pixels" >&2; exit 2 ;;
 esac
 for s in ${seeds[*]}; do
   out=$runs/seed-$s
+  results=${RESULTS:-docs/bench/results}/$mode.$row.seed$s.json
+  if [ -f "$results" ]; then
+    echo "$results exists: seed $s skipped"
+    continue
+  fi
   case $row in
     fast)
       "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$out" --force >/dev/null
@@ -43,7 +55,15 @@ for s in ${seeds[*]}; do
         --seed "$s" --env-config "{\"mode\": \"$mode\"}" --csv "$out/progress.csv" --summary "$out/summary.json" \
         --export "$out/model.onnx" >/dev/null
       model=$out/model.onnx; given=() ;;
+    pixels)
+      if [ -f "$out/resume.pt" ]; then
+        "$PY" -m chopperscape.learn.train --resume "$out" >/dev/null
+      else
+        "$PY" -m chopperscape.learn.train --preset pixels --mode "$mode" --steps "$steps" --seed "$s" --out "$out" \
+          >/dev/null
+      fi
+      model=$out/model.pt; given=() ;;
   esac
   "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
-    --out "${RESULTS:-docs/bench/results}/$mode.$row.seed$s.json"
+    --out "$results"
 done
