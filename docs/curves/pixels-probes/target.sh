@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The teacher-free target's runs (issue 28): the candidate recipe (p3 of docs/learning.md, "Teacher-free probes,
-# second round": the pixel preset at 42x42, GAE lambda 0.98, 64 envs x 128 steps, 2 epochs at lr 1e-3, a 10 M
-# decision schedule) for training seed SEED, started in RUNS/seed-SEED or resumed from its checkpoint there, for
-# at most MINUTES of wall time this call; then the held-out evaluation of the model it has so far
-# (RUNS/seed-SEED/eval-DECISIONS.json: 100 greedy episodes from seed 1,000,000, its frame skip 4).
+# The teacher-free target's runs (issue 28): `--preset pixels` (p3 of docs/learning.md, "Teacher-free probes,
+# second round": the 42x42 agent view, GAE lambda 0.98, 64 envs x 128 steps, 2 epochs at lr 1e-3, a 10 M
+# decision schedule; seeds 0-2 were started with those settings as flags, the same recipe) for training seed
+# SEED, started in RUNS/seed-SEED or resumed from its checkpoint there, for at most MINUTES of wall time this
+# call; then the held-out evaluation of the model it has so far (RUNS/seed-SEED/eval-DECISIONS.json: 100 greedy
+# episodes from seed 1,000,000, its frame skip 4).
 #   bash docs/curves/pixels-probes/target.sh SEED RUNS MINUTES
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
@@ -15,8 +16,7 @@ out=$runs/seed-$seed
 if [ -f "$out/resume.pt" ]; then
   "$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes" >/dev/null
 else
-  "$PY" -m chopperscape.learn.train --preset pixels --option obs_size=[42,42] --gae-lambda 0.98 --num-envs 64 \
-    --update-epochs 2 --learning-rate 1e-3 --steps 10000000 --seed "$seed" --minutes "$minutes" --out "$out" >/dev/null
+  "$PY" -m chopperscape.learn.train --preset pixels --seed "$seed" --minutes "$minutes" --out "$out" >/dev/null
 fi
 decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
 "$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
