@@ -151,3 +151,19 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     again = model.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
     with torch.no_grad():
         assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
+
+
+@pytest.mark.parametrize("seed, name", [(0, "tf42-p3-e2-lr1e-3"), (1, "tf42-p3-seed1"), (2, "tf42-p3-seed2")])
+def test_the_pixel_preset_is_the_recipe_the_teacher_free_target_ran(seed, name):
+    """README's teacher-free figures (issue 28) are of runs started with the candidate's settings as flags; their
+    committed recipes are `--preset pixels` with that seed, field for field, so the preset reproduces them."""
+    import dataclasses
+    import pathlib
+
+    from chopperscape.learn.recipe import PRESETS, Recipe
+
+    curves = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / "pixels-probes"
+    ran = json.loads((curves / f"{name}.recipe.json").read_text())
+    preset = dataclasses.asdict(Recipe(**PRESETS["pixels"], seed=seed))
+    assert ran == preset
+    assert (ran["teacher"], ran["aux_coef"]) == ("", 0.0)
