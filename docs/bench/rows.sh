@@ -19,16 +19,13 @@ mode=${2:?a mode: sticky-v0 or full-v0}
 runs=${3:?a folder for the runs}
 shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
-case $row in
-  pixels) steps=${STEPS:-2000000} ;;
-  *) steps=${STEPS:-1000000} ;;
-esac
+steps=${STEPS:-}
 case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
   sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
-  sb3-dqn) name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
+  sb3-dqn) steps=${steps:-1000000}; name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
   rllib-ppo) name="RLlib PPO, the fast preset's settings, 3 M decisions" ;;
-  pixels) name="pixel preset: PPO on 42x42 frames alone, $((steps / 1000)) k decisions" ;;
+  pixels) steps=${steps:-2000000}; name="pixel preset: PPO on 42x42 frames alone, $((steps / 1000)) k decisions" ;;
   *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn, rllib-ppo, pixels" >&2; exit 2 ;;
 esac
 for s in ${seeds[*]}; do

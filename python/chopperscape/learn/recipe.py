@@ -52,31 +52,30 @@ RECIPE_FLAGS = (
 #: "Teacher-free probes, second round"; p3 there); 84×84 with λ 0.95 did not train from frames alone here.
 #: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
 #: features teacher (`--teacher`), the faster, privileged route.
+#: What the two pixel presets share: a small CNN on grayscale frames, 4 stacked at frame skip 4, γ 0.998 a decision.
+_FRAMES: dict[str, Any] = {
+    "obs_type": "grayscale",
+    "network": "small",
+    "num_steps": 128,
+    "num_minibatches": 4,
+    "gamma": 0.998,
+    "ent_coef": 0.01,
+}
 PRESETS: dict[str, dict[str, Any]] = {
     "features": {},
     "pixels": {
-        "obs_type": "grayscale",
+        **_FRAMES,
         "env_options": {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4},
-        "network": "small",
         "num_envs": 64,
-        "num_steps": 128,
-        "num_minibatches": 4,
         "update_epochs": 2,
-        "gamma": 0.998,
         "gae_lambda": 0.98,
-        "ent_coef": 0.01,
         "learning_rate": 1e-3,
         "total_steps": 10_000_000,
     },
     "pixels-teacher": {
-        "obs_type": "grayscale",
+        **_FRAMES,
         "env_options": {"obs_size": [84, 84], "frame_stack": 4, "frame_skip": 4},
-        "network": "small",
         "num_envs": 32,
-        "num_steps": 128,
-        "num_minibatches": 4,
-        "gamma": 0.998,
-        "ent_coef": 0.01,
         "learning_rate": 2.5e-4,
     },
 }
