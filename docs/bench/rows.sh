@@ -3,6 +3,8 @@
 # SEEDS), one at a time, then each model evaluated by the bench's protocol under the row's name. Results:
 # docs/bench/results/MODE.ROW.seedN.json (or $RESULTS/). MODE is sticky-v0 or full-v0 (frame skip 4).
 #   fast     the fast preset, `train --preset fast --mode MODE`: about 2 CPU minutes a seed to train, 1 to evaluate
+#   features the features recipe as it stands (no preset), `train --mode MODE --steps $STEPS` (default 3,000,000
+#            decisions, the fast preset's budget)
 #   sb3-ppo  SB3's PPO with the fast preset's settings, `python/examples/sb3_ppo.py --preset fast`: about as long
 #   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 1,000,000)
 #   pixels   the pixel preset on frames alone, `train --preset pixels --mode MODE --steps $STEPS` (default
@@ -14,19 +16,22 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 PY=${PYTHON:-python}
-row=${1:?a row: fast, sb3-ppo, sb3-dqn, rllib-ppo or pixels}
+row=${1:?a row: fast, features, sb3-ppo, sb3-dqn, rllib-ppo or pixels}
 mode=${2:?a mode: sticky-v0 or full-v0}
 runs=${3:?a folder for the runs}
 shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
 steps=${STEPS:-}
+# A budget as a row's name says it: 3000000 is "3 M", 250000 "250 k".
+budget() { if (($1 % 1000000 == 0)); then echo "$(($1 / 1000000)) M"; else echo "$(($1 / 1000)) k"; fi; }
 case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
+  features) steps=${steps:-3000000}; name="features recipe: PPO on features, $(budget "$steps") decisions" ;;
   sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
-  sb3-dqn) steps=${steps:-1000000}; name="SB3 DQN, stock, $((steps / 1000)) k decisions" ;;
+  sb3-dqn) steps=${steps:-1000000}; name="SB3 DQN, stock, $(budget "$steps") decisions" ;;
   rllib-ppo) name="RLlib PPO, the fast preset's settings, 3 M decisions" ;;
-  pixels) steps=${steps:-2000000}; name="pixel preset: PPO on 42x42 frames alone, $((steps / 1000)) k decisions" ;;
-  *) echo "error: unknown row '$row': allowed fast, sb3-ppo, sb3-dqn, rllib-ppo, pixels" >&2; exit 2 ;;
+  pixels) steps=${steps:-2000000}; name="pixel preset: PPO on 42x42 frames alone, $(budget "$steps") decisions" ;;
+  *) echo "error: unknown row '$row': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels" >&2; exit 2 ;;
 esac
 for s in ${seeds[*]}; do
   out=$runs/seed-$s
@@ -38,6 +43,9 @@ for s in ${seeds[*]}; do
   case $row in
     fast)
       "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$out" --force >/dev/null
+      model=$out/model.pt; given=() ;;
+    features)
+      "$PY" -m chopperscape.learn.train --mode "$mode" --steps "$steps" --seed "$s" --out "$out" --force >/dev/null
       model=$out/model.pt; given=() ;;
     sb3-ppo)
       "$PY" python/examples/sb3_ppo.py --preset fast --mode "$mode" --seed "$s" --out "$out"
