@@ -6,12 +6,14 @@
 #   features the features recipe as it stands (no preset), `train --mode MODE --steps $STEPS` (default 3,000,000
 #            decisions, the fast preset's budget)
 #   sb3-ppo  SB3's PPO with the fast preset's settings, `python/examples/sb3_ppo.py --preset fast`: about as long
-#   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 1,000,000)
+#   sb3-dqn  a stock SB3 DQN, `python/examples/sb3_dqn.py`, for $STEPS decisions (default 500,000: about 12
+#            minutes of one core a seed; its training return is flat from there to 800,000)
 #   pixels   the pixel preset on frames alone, `train --preset pixels --mode MODE --steps $STEPS` (default
-#            2,000,000 decisions: about 35 minutes of one core a seed); a seed's run resumes from its checkpoint
+#            1,000,000 decisions: about 17 minutes of one core a seed); a seed's run resumes from its checkpoint
 #   rllib-ppo  RLlib's PPO with the fast preset's settings, `python/examples/rllib_ppo.py` (one runner of 128 games,
 #            run by $RLLIB_PYTHON, default .venv-rllib/bin/python), exported with --export and evaluated from the ONNX
-# A seed whose results file exists is skipped, so a long row continues where it stopped.
+# A seed whose results file exists is skipped, so a long row continues where it stopped. DRY_RUN=1 prints each
+# command (shell-quoted, one a line) instead of running it.
 #     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -23,15 +25,22 @@ shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
 steps=${STEPS:-}
 # A budget as a row's name says it: 3000000 is "3 M", 250000 "250 k".
+# run CMD...: runs it (quietly: its standard output dropped), or prints it under DRY_RUN.
+run() { if [ -n "${DRY_RUN:-}" ]; then local line; line=$(printf '%q ' "$@"); echo "${line% }"; else "$@"; fi; }
+quietly() { if [ -n "${DRY_RUN:-}" ]; then run "$@"; else "$@" >/dev/null; fi; }
 budget() { if (($1 % 1000000 == 0)); then echo "$(($1 / 1000000)) M"; else echo "$(($1 / 1000)) k"; fi; }
 case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
   features) steps=${steps:-3000000}; name="features recipe: PPO on features, $(budget "$steps") decisions" ;;
   sb3-ppo) name="SB3 PPO, the fast preset's settings, 3 M decisions" ;;
-  sb3-dqn) steps=${steps:-1000000}; name="SB3 DQN, stock, $(budget "$steps") decisions" ;;
+  sb3-dqn) steps=${steps:-500000}; name="SB3 DQN, stock, $(budget "$steps") decisions" ;;
   rllib-ppo) name="RLlib PPO, the fast preset's settings, 3 M decisions" ;;
-  pixels) steps=${steps:-2000000}; name="pixel preset: PPO on 42x42 frames alone, $(budget "$steps") decisions" ;;
+  pixels) steps=${steps:-1000000}; name="pixel preset: PPO on 42x42 frames alone, $(budget "$steps") decisions" ;;
   *) echo "error: unknown row '$row': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels" >&2; exit 2 ;;
+esac
+case $mode in
+  sticky-v0 | full-v0) ;;
+  *) echo "error: unknown mode '$mode' for a trained row: allowed sticky-v0, full-v0 (frame skip 4)" >&2; exit 2 ;;
 esac
 for s in ${seeds[*]}; do
   out=$runs/seed-$s
@@ -42,33 +51,33 @@ for s in ${seeds[*]}; do
   fi
   case $row in
     fast)
-      "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$out" --force >/dev/null
+      quietly "$PY" -m chopperscape.learn.train --preset fast --mode "$mode" --seed "$s" --out "$out" --force
       model=$out/model.pt; given=() ;;
     features)
-      "$PY" -m chopperscape.learn.train --mode "$mode" --steps "$steps" --seed "$s" --out "$out" --force >/dev/null
+      quietly "$PY" -m chopperscape.learn.train --mode "$mode" --steps "$steps" --seed "$s" --out "$out" --force
       model=$out/model.pt; given=() ;;
     sb3-ppo)
-      "$PY" python/examples/sb3_ppo.py --preset fast --mode "$mode" --seed "$s" --out "$out"
+      run "$PY" python/examples/sb3_ppo.py --preset fast --mode "$mode" --seed "$s" --out "$out"
       model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:128") ;;
     sb3-dqn)
-      "$PY" python/examples/sb3_dqn.py --mode "$mode" --steps "$steps" --seed "$s" --out "$out"
+      run "$PY" python/examples/sb3_dqn.py --mode "$mode" --steps "$steps" --seed "$s" --out "$out"
       model=$out/model.zip; given=(--option obs_type='"features"' --train-seeds "$s:1") ;;
     rllib-ppo)
       # The fast preset's settings in RLlib's terms (rllib_ppo.py --preset fast reads them from PRESETS).
-      mkdir -p "$out"
-      "${RLLIB_PYTHON:-.venv-rllib/bin/python}" python/examples/rllib_ppo.py --preset fast --env-runners 1 \
+      run mkdir -p "$out"
+      quietly "${RLLIB_PYTHON:-.venv-rllib/bin/python}" python/examples/rllib_ppo.py --preset fast --env-runners 1 \
         --seed "$s" --env-config "{\"mode\": \"$mode\"}" --csv "$out/progress.csv" --summary "$out/summary.json" \
-        --export "$out/model.onnx" >/dev/null
+        --export "$out/model.onnx"
       model=$out/model.onnx; given=() ;;
     pixels)
       if [ -f "$out/resume.pt" ]; then
-        "$PY" -m chopperscape.learn.train --resume "$out" >/dev/null
+        quietly "$PY" -m chopperscape.learn.train --resume "$out"
       else
-        "$PY" -m chopperscape.learn.train --preset pixels --mode "$mode" --steps "$steps" --seed "$s" --out "$out" \
-          >/dev/null
+        quietly "$PY" -m chopperscape.learn.train --preset pixels --mode "$mode" --steps "$steps" --seed "$s" \
+          --out "$out"
       fi
       model=$out/model.pt; given=() ;;
   esac
-  "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
+  run "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
     --out "$results"
 done

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -336,6 +337,69 @@ def test_the_leaderboard_page_shows_the_committed_results():
     files = sorted(str(p) for p in RESULTS.glob("*.json"))
     for row in report.markdown(report.report(report.load_all(files))).splitlines()[2:]:
         assert row in page, f"docs/site/bench.md lacks the row (regenerate it, see the page):\n{row}"
+
+
+ROWS_SH = ROOT / "docs" / "bench" / "rows.sh"
+#: The trained rows rows.sh makes, and the command that trains each (after the interpreter).
+TRAINED_ROWS = {
+    "fast": ["-m", "chopperscape.learn.train", "--preset", "fast"],
+    "features": ["-m", "chopperscape.learn.train", "--mode"],
+    "sb3-ppo": ["python/examples/sb3_ppo.py", "--preset", "fast"],
+    "sb3-dqn": ["python/examples/sb3_dqn.py", "--mode"],
+    "rllib-ppo": ["python/examples/rllib_ppo.py", "--preset", "fast"],
+    "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels"],
+}
+
+
+def _rows_sh(*args: str, results: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    given = {k: v for k, v in os.environ.items() if k not in ("STEPS", "RLLIB_PYTHON")}
+    given |= {"DRY_RUN": "1", "PYTHON": "py", "RESULTS": str(results), **(env or {})}
+    return subprocess.run(["bash", str(ROWS_SH), *args], capture_output=True, text=True, env=given, cwd=ROOT)
+
+
+def _commands(done: subprocess.CompletedProcess[str]) -> list[list[str]]:
+    assert done.returncode == 0, done.stderr
+    return [shlex.split(line) for line in done.stdout.splitlines() if not line.endswith("skipped")]
+
+
+@pytest.mark.parametrize("row", sorted(TRAINED_ROWS))
+@pytest.mark.parametrize("mode", ["sticky-v0", "full-v0"])
+def test_rows_sh_trains_each_seed_on_the_mode_and_evaluates_it_under_a_valid_row_name(row, mode, tmp_path):
+    """docs/bench/rows.sh (DRY_RUN prints its commands): each seed is trained on the mode's rules with that seed,
+    then its model evaluated on the same mode under the row's name, into MODE.ROW.seedS.json; the name is one the
+    results files accept, and a committed row of the same kind carries exactly that name."""
+    commands = _commands(_rows_sh(row, mode, "runs", "3", "7", results=tmp_path))
+    evaluations = [c for c in commands if c[1:4] == ["-m", "chopperscape.bench", "evaluate"]]
+    assert len(evaluations) == 2
+    for seed, ev in zip((3, 7), evaluations):
+        train = commands[commands.index(ev) - 1]
+        assert train[1 : 1 + len(TRAINED_ROWS[row])] == TRAINED_ROWS[row]
+        assert train[train.index("--seed") + 1] == str(seed)
+        assert mode in " ".join(train)  # --mode MODE, or RLlib's env config {"mode": MODE}
+        assert ev[ev.index("--mode") + 1] == mode
+        assert ev[ev.index("--out") + 1] == str(tmp_path / f"{mode}.{row}.seed{seed}.json")
+        assert ev[4].startswith(f"runs/seed-{seed}/model.")
+        name = results.check_name(ev[ev.index("--name") + 1])
+    committed = {json.loads(f.read_text())["policy"].get("name") for f in RESULTS.glob(f"*.{row}.seed*.json")}
+    assert committed <= {name}, f"committed {row} rows are named {committed}, rows.sh names them {name!r}"
+
+
+def test_rows_sh_skips_a_seed_whose_results_exist_and_refuses_unknown_rows_and_modes(tmp_path):
+    (tmp_path / "sticky-v0.fast.seed1.json").write_text("{}")
+    done = _rows_sh("fast", "sticky-v0", "runs", "1", "2", results=tmp_path)
+    assert f"{tmp_path}/sticky-v0.fast.seed1.json exists: seed 1 skipped" in done.stdout
+    assert [c[c.index("--seed") + 1] for c in _commands(done) if "--seed" in c] == ["2"]
+    refused = [
+        (("ppo", "sticky-v0"), "error: unknown row 'ppo': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels"),
+        (("fast", "v0"), "error: unknown mode 'v0' for a trained row: allowed sticky-v0, full-v0"),
+    ]
+    for args, says in refused:
+        done = _rows_sh(*args, "runs", results=tmp_path)
+        assert (done.returncode, done.stdout) == (2, "") and says in done.stderr
+    # $STEPS sets a budgeted row's budget and its name with it.
+    train, ev = _commands(_rows_sh("sb3-dqn", "full-v0", "runs", "0", results=tmp_path, env={"STEPS": "250000"}))
+    assert train[train.index("--steps") + 1] == "250000"
+    assert ev[ev.index("--name") + 1] == "SB3 DQN, stock, 250 k decisions"
 
 
 @pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md", "docs/site/environment.md"])
