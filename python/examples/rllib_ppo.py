@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from chopperscape.learn.recipe import DEFAULT_STEPS, PRESETS, Recipe
+from chopperscape.learn.recipe import DEFAULT_STEPS, LR_FLOOR, PRESETS, Recipe
 
 #: Episodes the mean and std of each row are taken over.
 WINDOW = 100
@@ -49,14 +49,17 @@ DEFAULTS: dict[str, Any] = {
     "lambda_": 0.95,
     "entropy": 0.01,
     "hidden": "128,128",
+    # RLlib's own: PPO's clip 0.3 and its adaptive KL penalty, starting at 0.2.
+    "clip": 0.3,
+    "kl_coeff": 0.2,
 }
 
 
 def preset_settings(name: str, env_runners: int) -> dict[str, Any]:
     """The settings of `chopperscape.learn.train --preset NAME` (features) as this example's flags: its games split
     over `env_runners` runners (the driver's, with 0), one batch of games x steps, its minibatches, epochs, lr,
-    gamma, lambda, entropy, two hidden layers of its width, its step budget and env options. `ValueError` if the
-    games do not split evenly."""
+    gamma, lambda, entropy, clip, two hidden layers of its width, its step budget and env options, and no KL
+    penalty (the recipe has none). `ValueError` if the games do not split evenly."""
     preset = PRESETS[name]
     r = Recipe(**{k: v for k, v in preset.items() if k != "total_steps"})
     runners = max(env_runners, 1)
@@ -72,6 +75,8 @@ def preset_settings(name: str, env_runners: int) -> dict[str, Any]:
         "gamma": r.gamma,
         "lambda_": r.gae_lambda,
         "entropy": r.ent_coef,
+        "clip": r.clip_coef,
+        "kl_coeff": 0.0,
         "hidden": f"{r.hidden},{r.hidden}",
         "steps": preset.get("total_steps", DEFAULT_STEPS),
         "preset_env_options": dict(r.env_options),
@@ -107,7 +112,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         type=int,
         default=None,
         help="stop after the iteration that reaches this many env steps; the learning rate then falls linearly "
-        "to 0 at this count, as the recipe's (--no-anneal-lr keeps it constant)",
+        "over them to --lr-floor of itself, as the recipe's (--no-anneal-lr keeps it constant)",
+    )
+    p.add_argument(
+        "--lr-floor",
+        type=float,
+        default=LR_FLOOR,
+        help=f"the fraction of the learning rate the decay stops at, at (1 - floor) x --steps (default the recipe's "
+        f"{LR_FLOOR}; 0 falls to 0 at --steps, the schedule of this example's runs before the bench's rows)",
     )
     p.add_argument(
         "--no-anneal-lr", dest="anneal_lr", action="store_false", help="constant learning rate even with --steps"
@@ -133,7 +145,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         default=None,
         help="a features preset of chopperscape.learn.train in RLlib's terms (read from its one declaration, "
         "chopperscape.learn.recipe.PRESETS): its games (split over the runners), batch, minibatches, epochs, lr, "
-        "gamma, lambda, entropy, hidden width, frame skip and step budget; a flag given here wins",
+        "gamma, lambda, entropy, clip, hidden width, frame skip and step budget, and no KL penalty; a flag given "
+        "here wins",
     )
     p.add_argument("--train-batch-size", type=int, default=None, help="env steps per training iteration (8192)")
     p.add_argument("--minibatch-size", type=int, default=None, help="(default 1024)")
@@ -142,6 +155,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--gamma", type=float, default=None, help="(default 0.995)")
     p.add_argument("--lambda", dest="lambda_", type=float, default=None, help="(default 0.95)")
     p.add_argument("--entropy", type=float, default=None, help="entropy bonus coefficient (default 0.01)")
+    p.add_argument("--clip", type=float, default=None, help="PPO's clip of the probability ratio (default RLlib's 0.3)")
+    p.add_argument(
+        "--kl-coeff",
+        type=float,
+        default=None,
+        help="initial weight of RLlib's adaptive KL penalty (default RLlib's 0.2; 0 turns the penalty off)",
+    )
     p.add_argument(
         "--no-norm-reward",
         dest="norm_reward",
@@ -196,6 +216,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         p.error(f"--env-runners must be >= 0, got {args.env_runners}")
     if args.envs_per_runner < 1:
         p.error(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
+    if not 0 <= args.lr_floor < 1:
+        p.error(f"--lr-floor must be in [0, 1), got {args.lr_floor}")
+    if not 0 < args.clip < math.inf:
+        p.error(f"--clip must be a number > 0, got {args.clip}")
+    if not 0 <= args.kl_coeff < math.inf:
+        p.error(f"--kl-coeff must be a number >= 0, got {args.kl_coeff}")
     if not args.sample_timeout > 0:
         p.error(f"--sample-timeout must be > 0, got {args.sample_timeout}")
     if args.cpus_per_runner <= 0:
@@ -306,11 +332,19 @@ def build_config(args: argparse.Namespace):
             train_batch_size_per_learner=args.train_batch_size,
             minibatch_size=args.minibatch_size,
             num_epochs=args.epochs,
-            # As the recipe: linear decay to 0 at --steps (RLlib interpolates [[step, lr], ...] by env steps).
-            lr=[[0, args.lr], [args.steps, 0.0]] if args.steps and args.anneal_lr else args.lr,
+            # The recipe's schedule: linear decay to floor x lr at (1 - floor) x --steps, then held (RLlib
+            # interpolates [[step, lr], ...] by env steps and keeps the last value past the last point).
+            lr=(
+                [[0, args.lr], [round((1 - args.lr_floor) * args.steps), args.lr_floor * args.lr]]
+                if args.steps and args.anneal_lr
+                else args.lr
+            ),
             gamma=args.gamma,
             lambda_=args.lambda_,
             entropy_coeff=args.entropy,
+            clip_param=args.clip,
+            use_kl_loss=args.kl_coeff > 0,
+            kl_coeff=args.kl_coeff,
             vf_loss_coeff=0.5,
             vf_clip_param=math.inf,  # rewards are scaled (below); RLlib's default clips the value loss at 10
             grad_clip=0.5,

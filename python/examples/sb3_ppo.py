@@ -38,7 +38,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from chopperscape import MODES
 from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings, save_normalization
 from chopperscape.learn import progress
-from chopperscape.learn.recipe import PRESETS, Recipe
+from chopperscape.learn.recipe import LR_FLOOR, PRESETS, Recipe
 
 
 class ProgressCsv(BaseCallback):
@@ -147,7 +147,7 @@ def main() -> None:
         model = PPO(
             "MlpPolicy",
             env,
-            learning_rate=lambda remaining: lr * max(remaining, 0.05),
+            learning_rate=lambda remaining: lr * max(remaining, LR_FLOOR),
             **ppo_settings(r),
             seed=a.seed,
             device="cpu",

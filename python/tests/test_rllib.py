@@ -99,6 +99,12 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--eval-seed", "-5"], "--eval-seed must be in 0..2**63, got -5"),
         (["--export", "/no/such/folder/p.onnx"], "--export '/no/such/folder/p.onnx': '/no/such/folder' does not exist"),
         (["--sample-timeout", "0"], "--sample-timeout must be > 0, got 0.0"),
+        (["--clip", "0"], "--clip must be a number > 0, got 0.0"),
+        (["--clip", "nan"], "--clip must be a number > 0, got nan"),
+        (["--kl-coeff", "-0.1"], "--kl-coeff must be a number >= 0, got -0.1"),
+        (["--kl-coeff", "inf"], "--kl-coeff must be a number >= 0, got inf"),
+        (["--lr-floor", "1"], "--lr-floor must be in [0, 1), got 1.0"),
+        (["--lr-floor", "-0.5"], "--lr-floor must be in [0, 1), got -0.5"),
         (["--preset", "fast", "--env-runners", "3"], "--preset fast: its 128 games do not split over 3 runners evenly"),
         (["--export", "/"], "--export '/' is a folder: give the ONNX file to write"),
     ],
@@ -116,12 +122,14 @@ def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
 
 
 def test_example_preset_is_the_trainers_preset_in_rllibs_terms():
-    """`--preset fast` reads chopperscape.learn.recipe.PRESETS (one declaration), and a flag given beside it wins."""
+    """`--preset fast` reads chopperscape.learn.recipe.PRESETS (one declaration), with the recipe's clip, no KL
+    penalty (the recipe has none) and its learning-rate floor; a flag given beside it wins. Without a preset the
+    example keeps RLlib's clip and KL penalty."""
     spec = importlib.util.spec_from_file_location("rllib_ppo_example", EXAMPLE)
     assert spec is not None and spec.loader is not None
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
-    from chopperscape.learn.recipe import PRESETS, Recipe
+    from chopperscape.learn.recipe import LR_FLOOR, PRESETS, Recipe
 
     fast = PRESETS["fast"]
     a = example.parse_args(["--preset", "fast", "--env-runners", "2", "--lr", "5e-4", "--env-config", '{"lives": 2}'])
@@ -130,10 +138,33 @@ def test_example_preset_is_the_trainers_preset_in_rllibs_terms():
     assert a.minibatch_size == batch // fast["num_minibatches"] and a.epochs == fast["update_epochs"]
     assert (a.gamma, a.lambda_, a.steps) == (fast["gamma"], fast["gae_lambda"], fast["total_steps"])
     assert a.entropy == Recipe().ent_coef and a.hidden == [Recipe().hidden] * 2
+    assert (a.clip, a.kl_coeff, a.lr_floor) == (Recipe().clip_coef, 0.0, LR_FLOOR)
     assert a.lr == 5e-4  # the flag, not the preset's 1e-3
+    assert example.parse_args(["--preset", "fast", "--kl-coeff", "0.2"]).kl_coeff == 0.2
     assert a.env_config == {"obs_type": "features", **fast["env_options"], "lives": 2}
     plain = example.parse_args([])
     assert (plain.envs_per_runner, plain.train_batch_size, plain.lr, plain.steps) == (16, 8192, 3e-4, None)
+    assert (plain.clip, plain.kl_coeff) == (0.3, 0.2)  # RLlib's own
+
+
+def test_example_config_carries_the_presets_clip_kl_and_learning_rate_schedule():
+    """What `--preset fast` sets reaches RLlib's PPOConfig: the clip, the KL penalty off, and the recipe's schedule
+    (the rate falling to LR_FLOOR of itself at (1 - LR_FLOOR) x --steps, then held); `--lr-floor 0` is the old
+    decay to 0 at --steps, and RLlib's own clip and KL penalty stay without a preset."""
+    spec = importlib.util.spec_from_file_location("rllib_ppo_example", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    from chopperscape.learn.recipe import LR_FLOOR, PRESETS
+
+    fast = example.build_config(example.parse_args(["--preset", "fast"]))
+    steps, lr = PRESETS["fast"]["total_steps"], PRESETS["fast"]["learning_rate"]
+    assert (fast.clip_param, fast.use_kl_loss, fast.kl_coeff) == (0.2, False, 0.0)
+    assert fast.lr == [[0, lr], [round((1 - LR_FLOOR) * steps), LR_FLOOR * lr]]
+    old = example.build_config(example.parse_args(["--steps", "5000000", "--lr-floor", "0"]))
+    assert old.lr == [[0, 3e-4], [5_000_000, 0.0]]
+    assert (old.clip_param, old.use_kl_loss, old.kl_coeff) == (0.3, True, 0.2)
+    assert example.build_config(example.parse_args([])).lr == 3e-4  # no budget, no schedule
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,6 @@ mkdir -p "$OUT"
 PY=${PY:-.venv-rllib/bin/python}
 [ -s "$OUT/seed-$s.eval.json" ] || OMP_NUM_THREADS=1 $PY python/examples/rllib_ppo.py --steps 5000000 --seed "$s" \
   --env-runners 1 --envs-per-runner 64 --train-batch-size 16384 --minibatch-size 2048 --epochs 4 \
-  --gamma 0.9995 --entropy 0.02 --csv "$OUT/seed-$s.csv" --checkpoint "$OUT/ckpt-seed-$s" \
+  --gamma 0.9995 --entropy 0.02 --lr-floor 0 --csv "$OUT/seed-$s.csv" --checkpoint "$OUT/ckpt-seed-$s" \
   --summary "$OUT/seed-$s.summary.json" --eval-episodes 100 --eval-seed 1000000 --eval-out "$OUT/seed-$s.eval.json" \
   > "$OUT/seed-$s.log" 2>&1

@@ -113,6 +113,10 @@ MAX_ROLLOUT_BYTES = 8 << 30
 #: The most parameters a network may have (1 GiB of float32 weights; the pixel recipe's CNN has 0.7 million).
 MAX_PARAMETERS = 1 << 28
 
+#: The learning rate's schedule over a step budget of T (`Recipe.anneal_lr`): the rate times max(1 - t / T, LR_FLOOR),
+#: a linear decay that stops at 5 % of the rate at 0.95 T. The SB3 and RLlib examples follow the same schedule.
+LR_FLOOR = 0.05
+
 #: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core. A preset may
 #: carry its own (`total_steps`); `--steps` wins over both.
 DEFAULT_STEPS = 15_000_000
@@ -150,7 +154,7 @@ class Recipe:
     seed: int = 0
     torch_threads: int = 1
     env_threads: int = 1
-    #: The step budget: the learning rate anneals linearly to 5 % over it.
+    #: The step budget: the learning rate anneals linearly over it, to `LR_FLOOR` of itself.
     total_steps: int = DEFAULT_STEPS
     #: Pixel recipes only: weight of an auxiliary loss that trains the CNN's trunk to predict the game's 46
     #: `features` (standardised) from the frames, read from a twin env that the same seeds and actions keep in

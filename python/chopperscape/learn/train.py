@@ -55,6 +55,7 @@ from .guidance import Guidance, env_state, load_teacher, set_env_state
 from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, random_shift, save, shift_pad
 from .phases import OFF, Phases
 from .recipe import (
+    LR_FLOOR,
     MAX_PARAMETERS,
     MAX_ROLLOUT_BYTES,
     RUN_FILES,
@@ -328,7 +329,7 @@ def train(
             # The learning rate follows env steps only: the same run on a busy host is the same run.
             lr = recipe.learning_rate
             if recipe.anneal_lr:
-                lr *= max(1.0 - env_steps / recipe.total_steps, 0.05)
+                lr *= max(1.0 - env_steps / recipe.total_steps, LR_FLOOR)
             optimizer.param_groups[0]["lr"] = lr
 
             # --- Rollout ---------------------------------------------------------------------------------------
