@@ -1,6 +1,6 @@
 #!/bin/bash
 # RLlib PPO with the recipe's settings (γ 0.9995, entropy 0.02, batches of 16,384 steps in minibatches of 2,048,
-# 4 epochs, lr 3e-4 falling linearly to 0, returns scaled), 5 M env steps, then 100 greedy episodes on the
+# 4 epochs, lr 3e-4 falling linearly to 0, returns scaled; RLlib's own clip 0.3 and KL penalty), 5 M env steps, then 100 greedy episodes on the
 # held-out seeds 1000000.. . From the repository root: bash docs/curves/rllib-3seeds/run.sh K   (K: training seed)
 # The committed figures (docs/curves/rllib-3seeds): seed 0 was trained without the --eval flags, then evaluated
 # from its checkpoint with `--restore runs/rllib-3seeds/ckpt-seed-0 --eval-only --eval-episodes 100` (the same
