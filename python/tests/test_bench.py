@@ -402,6 +402,25 @@ def test_rows_sh_skips_a_seed_whose_results_exist_and_refuses_unknown_rows_and_m
     assert ev[ev.index("--name") + 1] == "SB3 DQN, stock, 250 k decisions"
 
 
+def test_each_committed_trained_row_is_whole_training_seeds_0_to_9_named_alike():
+    """A trained row (`MODE.ROW.seedS.json`, made by rows.sh) is committed whole: seeds 0-9, one name, ten
+    different trained policies, each file's training seeds its own (S's games for the trainer and SB3)."""
+    rows: dict[tuple[str, str], dict[int, dict]] = {}
+    for f in RESULTS.glob("*.seed*.json"):
+        mode, row, seed = f.name.removesuffix(".json").split(".")
+        if row in TRAINED_ROWS:
+            rows.setdefault((mode, row), {})[int(seed.removeprefix("seed"))] = json.loads(f.read_text())["policy"]
+    assert {("sticky-v0", "fast"), ("full-v0", "fast"), ("sticky-v0", "sb3-ppo")} <= set(rows)
+    for (mode, row), policies in rows.items():
+        assert sorted(policies) == list(range(10)), f"{mode}.{row}: seeds {sorted(policies)}"
+        assert len({p["name"] for p in policies.values()}) == 1
+        assert len({p["sha256"] for p in policies.values()}) == 10
+        assert len({tuple(p["train_seeds"]) for p in policies.values()}) == 10
+        for seed, p in policies.items():
+            if p["kind"] in ("recipe", "sb3"):
+                assert p["train_seeds"][0] == seed, f"{mode}.{row}.seed{seed}: trained on {p['train_seeds']}"
+
+
 @pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md", "docs/site/environment.md"])
 def test_the_modes_tables_of_the_docs_are_the_cores(page):
     text = (ROOT / page).read_text()
