@@ -12,8 +12,9 @@
 #            1,000,000 decisions: about 17 minutes of one core a seed); a seed's run resumes from its checkpoint
 #   rllib-ppo  RLlib's PPO with the fast preset's settings, `python/examples/rllib_ppo.py` (one runner of 128 games,
 #            run by $RLLIB_PYTHON, default .venv-rllib/bin/python), exported with --export and evaluated from the ONNX
-# A seed whose results file exists is skipped, so a long row continues where it stopped. DRY_RUN=1 prints each
-# command (shell-quoted, one a line) instead of running it.
+# A seed whose results file exists is skipped, so a long row continues where it stopped, and so is a seed another
+# rows.sh is training (its claim, RUNS_DIR/seed-S.claim, holds a live process id): several rows.sh on one row share
+# its seeds, one process a core. DRY_RUN=1 prints each command (shell-quoted, one a line) instead of running it.
 #     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -25,6 +26,14 @@ shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
 steps=${STEPS:-}
 # A budget as a row's name says it: 3000000 is "3 M", 250000 "250 k".
+# claim FILE: takes a seed for this process (the claim holds its process id), unless a live process holds it.
+claim() {
+  if (set -o noclobber; echo $$ >"$1") 2>/dev/null; then return 0; fi
+  local holder; holder=$(cat "$1" 2>/dev/null || true)
+  if [ -n "$holder" ] && kill -0 "$holder" 2>/dev/null; then return 1; fi
+  rm -f "$1"  # its process is gone: a stopped run, whose seed starts again (a pixel run resumes)
+  (set -o noclobber; echo $$ >"$1") 2>/dev/null
+}
 # run CMD...: runs it (quietly: its standard output dropped), or prints it under DRY_RUN.
 run() { if [ -n "${DRY_RUN:-}" ]; then local line; line=$(printf '%q ' "$@"); echo "${line% }"; else "$@"; fi; }
 quietly() { if [ -n "${DRY_RUN:-}" ]; then run "$@"; else "$@" >/dev/null; fi; }
@@ -48,6 +57,13 @@ for s in ${seeds[*]}; do
   if [ -f "$results" ]; then
     echo "$results exists: seed $s skipped"
     continue
+  fi
+  if [ -z "${DRY_RUN:-}" ]; then
+    mkdir -p "$runs"
+    if ! claim "$runs/seed-$s.claim"; then
+      echo "seed $s is being trained by process $(cat "$runs/seed-$s.claim"): skipped"
+      continue
+    fi
   fi
   case $row in
     fast)
@@ -80,4 +96,5 @@ for s in ${seeds[*]}; do
   esac
   run "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
     --out "$results"
+  [ -n "${DRY_RUN:-}" ] || rm -f "$runs/seed-$s.claim"
 done

@@ -402,6 +402,25 @@ def test_rows_sh_skips_a_seed_whose_results_exist_and_refuses_unknown_rows_and_m
     assert ev[ev.index("--name") + 1] == "SB3 DQN, stock, 250 k decisions"
 
 
+def test_rows_sh_leaves_a_seed_another_process_claims_and_takes_over_a_stale_claim(tmp_path):
+    """Several rows.sh on one row share its seeds: a seed claimed by a live process is skipped, a claim whose
+    process is gone (a stopped run) is taken over, and a finished seed's claim is removed. (PYTHON=true: every
+    command succeeds at once and writes nothing.)"""
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (runs / "seed-1.claim").write_text(f"{os.getpid()}\n")  # live: this test's process
+    dead = subprocess.Popen(["true"])  # a process that has exited, for its id
+    dead.wait()
+    (runs / "seed-2.claim").write_text(f"{dead.pid}\n")
+    done = _rows_sh(
+        "fast", "sticky-v0", str(runs), "1", "2", "3", results=tmp_path, env={"DRY_RUN": "", "PYTHON": "true"}
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == f"seed 1 is being trained by process {os.getpid()}: skipped\n"
+    assert (runs / "seed-1.claim").read_text() == f"{os.getpid()}\n"
+    assert not (runs / "seed-2.claim").exists() and not (runs / "seed-3.claim").exists()
+
+
 def test_each_committed_trained_row_is_whole_training_seeds_0_to_9_named_alike():
     """A trained row (`MODE.ROW.seedS.json`, made by rows.sh) is committed whole: seeds 0-9, one name, ten
     different trained policies, each file's training seeds its own (S's games for the trainer and SB3)."""
