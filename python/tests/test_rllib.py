@@ -248,6 +248,45 @@ def test_float_pixels_feed_rllibs_default_cnn_with_grayscale_frames():
     runner.stop()
 
 
+def test_return_scaling_runs_the_discounted_return_over_whole_episodes_across_batches():
+    """The learner's ReturnScaling carries each unfinished episode's discounted return into its next chunk (as
+    `NormalizeReward` does over a whole episode), through RLlib's own learner pipeline (which renames the chunks and
+    appends a bootstrap step that must not count): after each batch its carry is the reference return of every
+    live episode, and its statistics counted every real step once."""
+    config = (
+        PPOConfig()
+        .environment(crl.ENV_NAME, env_config={"obs_type": "features", "frame_skip": 4})
+        .env_runners(num_env_runners=0, num_envs_per_env_runner=4, gym_env_vectorize_mode="vector_entry_point")
+        .training(train_batch_size_per_learner=64, minibatch_size=32, num_epochs=1, gamma=0.9)
+        .learners(learner_class=crl.ReturnScaledPPOLearner)
+        .debugging(seed=3)
+    )
+    runner = SingleAgentEnvRunner(config=config, worker_index=0, num_workers=0)
+    learner = config.build_learner(env=runner.env)
+    scaling = [p for p in learner._learner_connector.connectors if isinstance(p, crl.ReturnScaling)]
+    assert len(scaling) == 1
+    reference: dict[str, float] = {}
+    steps = 0
+    for _ in range(3):
+        episodes = runner.sample(num_timesteps=64)
+        live = {}
+        for e in episodes:
+            ret = reference.get(e.id_, 0.0)
+            for r in e.get_rewards():
+                ret = ret * 0.9 + float(r)
+            steps += len(e)
+            if not e.is_terminated:
+                live[e.id_] = ret
+        reference = live
+        learner.update(episodes=episodes)
+        assert scaling[0].carry.keys() == reference.keys()
+        for i, ret in reference.items():
+            assert scaling[0].carry[i] == pytest.approx(ret, rel=1e-9)
+        assert scaling[0].rms.count == pytest.approx(steps + 1e-4)
+    assert max(reference.values()) > 38  # three chunks of 16 decisions: near 4 / (1 - 0.9) = 40, not one chunk's 33
+    runner.stop()
+
+
 # --- a real Ray cluster on loopback ------------------------------------------------------------------------------
 
 

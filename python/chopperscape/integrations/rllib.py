@@ -211,6 +211,12 @@ class ReturnScaling(ConnectorV2):
     updated from each batch's moments, and travel with the learner's state (checkpoints). The episode returns the
     env runners report stay the game's own: only what the learner sees is scaled.
 
+    As in `NormalizeReward`, the discounted return runs over the whole episode, not over the chunk of it that one
+    batch holds: a chunk that does not end its episode leaves its return to the episode's next chunk (`carry`, by
+    episode id). With batches of 128 steps and γ 0.998 a chunk is a quarter of the return's horizon, so returns
+    restarted at each chunk would be a few times smaller and scale the rewards a few times up. RLlib's bootstrap
+    step (`Columns.LOSS_MASK` false) neither adds to the return nor to the statistics.
+
     A batch whose rows are not one per episode step (padded for a recurrent module) is left as it is."""
 
     def __init__(
@@ -219,40 +225,86 @@ class ReturnScaling(ConnectorV2):
         super().__init__(input_observation_space, input_action_space, **kwargs)
         self.gamma = float(gamma)
         self.rms = RunningMeanStd(shape=())
+        #: The discounted return so far of each episode a batch left unfinished, by episode id.
+        self.carry: dict[str, float] = {}
 
     def __call__(self, *, rl_module: Any, batch: dict[str, Any], episodes: Any, **kwargs: Any) -> Any:
-        lens = [len(e) for e in self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False)]
+        chunks = list(self.single_agent_episode_iterator(episodes, agents_that_stepped_only=False))
+        lens = [len(e) for e in chunks]
+        ids = [episode_id(e.id_) for e in chunks]
         for module_batch in batch.values():
             rewards = module_batch[Columns.REWARDS]
-            r = rewards.detach().cpu().numpy() if hasattr(rewards, "detach") else np.asarray(rewards)
-            r = r.astype(np.float64)
+            r = _numpy(rewards).astype(np.float64)
             if r.shape[0] != sum(lens):
                 continue
-            self.rms.update(discounted_returns(r, lens, self.gamma))
+            mask = module_batch.get(Columns.LOSS_MASK)
+            real = np.ones(r.shape[0], bool) if mask is None else _numpy(mask).astype(bool).reshape(-1)
+            returns = discounted_returns(r, lens, self.gamma, [self.carry.get(i, 0.0) for i in ids], real)
+            if real.any():
+                self.rms.update(returns[real])
+            carry, end = {}, 0
+            for chunk, i, n in zip(chunks, ids, lens):
+                end += n
+                steps = np.flatnonzero(real[end - n : end])
+                if not chunk.is_terminated and steps.size:
+                    carry[i] = float(returns[end - n + steps[-1]])
+            self.carry = carry
             module_batch[Columns.REWARDS] = rewards * (1.0 / np.sqrt(self.rms.var + 1e-8))
         return batch
 
-    def get_state(self, components: Any = None, *, not_components: Any = None, **kwargs: Any) -> dict[str, float]:
-        return {"mean": float(self.rms.mean), "var": float(self.rms.var), "count": float(self.rms.count)}
+    def get_state(self, components: Any = None, *, not_components: Any = None, **kwargs: Any) -> dict[str, Any]:
+        return {
+            "mean": float(self.rms.mean),
+            "var": float(self.rms.var),
+            "count": float(self.rms.count),
+            "carry": dict(self.carry),
+        }
 
-    def set_state(self, state: dict[str, float]) -> None:
+    def set_state(self, state: dict[str, Any]) -> None:
         self.rms.mean = np.asarray(state["mean"], np.float64)
         self.rms.var = np.asarray(state["var"], np.float64)
         self.rms.count = float(state["count"])
+        self.carry = {str(k): float(v) for k, v in state.get("carry", {}).items()}
 
 
-def discounted_returns(rewards: np.ndarray, lengths: list[int], gamma: float) -> np.ndarray:
+def _numpy(x: Any) -> np.ndarray:
+    return x.detach().cpu().numpy() if hasattr(x, "detach") else np.asarray(x)
+
+
+def episode_id(chunk_id: str) -> str:
+    """The id of the episode an episode chunk of a learner's batch belongs to: RLlib's learner pipeline
+    (`AddOneTsToEpisodesAndTruncate`) appends `_<index in the batch>` to each chunk's id, which is otherwise the
+    episode's (a hex uuid, the same for all its chunks).
+
+    >>> episode_id("0f3a9c_12")
+    '0f3a9c'
+    """
+    return chunk_id.rsplit("_", 1)[0]
+
+
+def discounted_returns(
+    rewards: np.ndarray,
+    lengths: list[int],
+    gamma: float,
+    starts: list[float] | None = None,
+    real: np.ndarray | None = None,
+) -> np.ndarray:
     """The discounted return accumulated forward within each episode chunk: `rewards` holds the chunks one after
-    another, `lengths` their lengths (the quantity whose spread scales the rewards, as in `NormalizeReward`).
+    another, `lengths` their lengths, `starts` the return each chunk's episode had before it (0 by default), and
+    `real` which rows are steps (a row that is not, RLlib's bootstrap step, repeats the return before it).
 
     >>> discounted_returns(np.array([1.0, 1.0, 1.0, 2.0]), [3, 1], 0.5).tolist()
     [1.0, 1.5, 1.75, 2.0]
+    >>> real = np.array([True, True, False, True])  # the third row is a bootstrap step
+    >>> discounted_returns(np.array([1.0, 1.0, 0.0, 2.0]), [3, 1], 0.5, [2.0, 0.0], real).tolist()
+    [2.0, 2.0, 2.0, 2.0]
     """
     out, start = np.empty_like(rewards, dtype=np.float64), 0
-    for n in lengths:
-        acc = 0.0
+    for k, n in enumerate(lengths):
+        acc = 0.0 if starts is None else float(starts[k])
         for t in range(start, start + n):
-            acc = acc * gamma + rewards[t]
+            if real is None or real[t]:
+                acc = acc * gamma + rewards[t]
             out[t] = acc
         start += n
     return out
