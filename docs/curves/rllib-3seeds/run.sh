@@ -5,7 +5,8 @@
 # The committed figures (docs/curves/rllib-3seeds): seed 0 was trained without the --eval flags, then evaluated
 # from its checkpoint with `--restore runs/rllib-3seeds/ckpt-seed-0 --eval-only --eval-episodes 100` (the same
 # figures as in-run evaluation: test_rllib checks that a restored checkpoint plays identically); seeds 1 and 2 ran
-# this script as it stands. The summary: python -m chopperscape.learn.seeds --summarise DIR --steps 5000000
+# this script as it then stood: their ReturnScaling restarted the discounted return at each batch's chunk of an
+# episode, which it no longer does, so today's runs differ from the committed ones. The summary: python -m chopperscape.learn.seeds --summarise DIR --steps 5000000
 s=$1
 OUT=${OUT:-runs/rllib-3seeds}
 mkdir -p "$OUT"
