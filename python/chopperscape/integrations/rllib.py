@@ -214,7 +214,7 @@ class ReturnScaling(ConnectorV2):
     As in `NormalizeReward`, the discounted return runs over the whole episode, not over the chunk of it that one
     batch holds: a chunk that does not end its episode leaves its return to the episode's next chunk (`carry`, by
     episode id). With batches of 128 steps and γ 0.998 a chunk is a quarter of the return's horizon, so returns
-    restarted at each chunk would be a few times smaller and scale the rewards a few times up. RLlib's bootstrap
+    restarted at each chunk would spread less and scale the rewards up more. RLlib's bootstrap
     step (`Columns.LOSS_MASK` false) neither adds to the return nor to the statistics.
 
     A batch whose rows are not one per episode step (padded for a recurrent module) is left as it is."""
