@@ -248,6 +248,7 @@ def test_float_pixels_feed_rllibs_default_cnn_with_grayscale_frames():
     runner.stop()
 
 
+@reregistering
 def test_return_scaling_runs_the_discounted_return_over_whole_episodes_across_batches():
     """The learner's ReturnScaling carries each unfinished episode's discounted return into its next chunk (as
     `NormalizeReward` does over a whole episode), through RLlib's own learner pipeline (which renames the chunks and
