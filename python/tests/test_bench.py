@@ -440,6 +440,20 @@ def test_each_committed_trained_row_is_whole_training_seeds_0_to_9_named_alike()
                 assert p["train_seeds"][0] == seed, f"{mode}.{row}.seed{seed}: trained on {p['train_seeds']}"
 
 
+def test_the_in_progress_results_are_valid_rows_sh_runs_not_yet_on_the_leaderboard():
+    """docs/bench/in-progress/ holds the finished seeds of rows still being trained (rows.sh with RESULTS pointing
+    there): each file is a valid results file of a trained row, named as rows.sh names it, and no (mode, row) of
+    them is also on the leaderboard (a row moves there whole)."""
+    files = sorted((ROOT / "docs" / "bench" / "in-progress").glob("*.json"))
+    on_board = {tuple(f.name.split(".")[:2]) for f in RESULTS.glob("*.seed*.json")}
+    for f in files:
+        mode, row, seed = f.name.removesuffix(".json").split(".")
+        assert row in TRAINED_ROWS and seed.removeprefix("seed").isdigit(), f.name
+        data = results.load(f)
+        assert data["mode"]["name"] == mode and data["policy"]["kind"] in ("recipe", "sb3", "onnx"), f.name
+        assert (mode, row) not in on_board, f"{f.name}: its row is on the leaderboard; move the file there or drop it"
+
+
 @pytest.mark.parametrize("page", ["docs/SPEC.md", "docs/site/bench.md", "docs/site/environment.md"])
 def test_the_modes_tables_of_the_docs_are_the_cores(page):
     text = (ROOT / page).read_text()
