@@ -25,7 +25,6 @@ runs=${3:?a folder for the runs}
 shift 3
 seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
 steps=${STEPS:-}
-# A budget as a row's name says it: 3000000 is "3 M", 250000 "250 k".
 # claim FILE: takes a seed for this process (the claim holds its process id), unless a live process holds it.
 claim() {
   if (set -o noclobber; echo $$ >"$1") 2>/dev/null; then return 0; fi
@@ -37,6 +36,7 @@ claim() {
 # run CMD...: runs it (quietly: its standard output dropped), or prints it under DRY_RUN.
 run() { if [ -n "${DRY_RUN:-}" ]; then local line; line=$(printf '%q ' "$@"); echo "${line% }"; else "$@"; fi; }
 quietly() { if [ -n "${DRY_RUN:-}" ]; then run "$@"; else "$@" >/dev/null; fi; }
+# A budget as a row's name says it: 3000000 is "3 M", 250000 "250 k".
 budget() { if (($1 % 1000000 == 0)); then echo "$(($1 / 1000000)) M"; else echo "$(($1 / 1000)) k"; fi; }
 case $row in
   fast) name="fast preset: PPO on features, 3 M decisions" ;;
