@@ -32,8 +32,8 @@ sys.path = [p for p in sys.path if os.path.abspath(p or ".") != os.path.dirname(
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from chopperscape import VectorEnv  # noqa: E402
-from chopperscape.learn import model, train  # noqa: E402
+from chopperscape import NUM_ACTIONS, VectorEnv  # noqa: E402
+from chopperscape.learn import networks, normalize, train  # noqa: E402
 from chopperscape.learn.phases import PHASES, Phases  # noqa: E402
 from chopperscape.learn.recipe import PRESETS, Recipe, network_of  # noqa: E402
 
@@ -60,9 +60,11 @@ def floors(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
     shape = tuple(envs.single_observation_space.shape or ())
     envs.close()
     pixels = network_of(recipe) != "mlp"
-    agent = model.build_agent(network_of(recipe), shape, 5, recipe.hidden, recipe.invert_frames).to(recipe.device)
+    agent = networks.build_agent(network_of(recipe), shape, NUM_ACTIONS, recipe.hidden, recipe.invert_frames).to(
+        recipe.device
+    )
     batch = np.repeat(obs[None], t_len, axis=0).reshape(n * t_len, *shape)
-    norm = model.ObsNormalizer(shape, recipe.norm_obs and not pixels)
+    norm = normalize.ObsNormalizer(shape, recipe.norm_obs and not pixels)
     t = time.perf_counter()
     for _ in range(repeats):
         x = torch.from_numpy(batch if pixels else norm(batch, update=True)).to(recipe.device)

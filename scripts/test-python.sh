@@ -21,13 +21,13 @@ PY=.venv/bin/python
 # Everything the tests import, in one resolution, at the pinned versions: gymnasium, numpy, pytest; pygame; the
 # learning tool chain (torch from PyPI, about 5 GB with its CUDA libraries, of which the CPU build is all the recipe
 # uses; Stable-Baselines3, matplotlib); onnx and onnxruntime (the export and its logits check); Minari with HDF5 and
-# pillow (the dataset tests); the quality gate's ruff and mypy. The stamp is the constraints file's hash: a new pin
-# reinstalls.
+# pillow (the dataset tests); the quality gate's ruff, mypy and import-linter. The stamp is the constraints file's
+# hash: a new pin reinstalls.
 deps_stamp=.venv/.chopperscape-deps
 deps_hash=$(sha256sum "$CONSTRAINTS" | cut -d' ' -f1)
 if [ "$(cat "$deps_stamp" 2>/dev/null)" != "$deps_hash" ]; then
   if pip_install "$PY" gymnasium numpy pytest pygame torch stable-baselines3 matplotlib onnx onnxruntime \
-    "minari[hdf5]" pillow ruff mypy; then
+    "minari[hdf5]" pillow ruff mypy import-linter; then
     echo "$deps_hash" >"$deps_stamp"
   else
     skip "the Python test dependencies of scripts/constraints.txt could not all be installed; tests that need them skip"
@@ -97,6 +97,8 @@ run_pytest() {
 quiet .venv/bin/ruff check --no-cache .
 quiet .venv/bin/ruff format --check --no-cache .
 (cd python && quiet ../.venv/bin/mypy --no-incremental)
+# The package's layers (python/pyproject.toml, [tool.importlinter]; ARCHITECTURE.md states them), from the sources.
+(cd python && quiet ../.venv/bin/lint-imports --no-cache)
 (cd "$(mktemp -d)" && quiet "$ROOT/$PY" -m mypy.stubtest chopperscape._core --allowlist "$ROOT/python/stubtest-allowlist.txt")
 pkg=$("$PY" -c 'import chopperscape, os; print(os.path.dirname(os.path.abspath(chopperscape.__file__)))')
 # Doctests of the installed package; the RLlib module's run under .venv-rllib below.

@@ -21,6 +21,7 @@ __all__ = [
     "ACTION_MEANINGS",
     "FEATURES_VERSION",
     "MODES",
+    "NUM_ACTIONS",
     "OPTION_NAMES",
     "PIXELS_VERSION",
     "ChopperScapeEnv",
@@ -32,6 +33,8 @@ __all__ = [
 ]
 __version__ = _core.__version__
 ACTION_MEANINGS: list[str] = list(_core.ACTION_MEANINGS)
+#: The size of the action space, `Discrete(NUM_ACTIONS)`: one action per meaning.
+NUM_ACTIONS: int = len(_core.ACTION_MEANINGS)
 OPTION_NAMES: list[str] = [n for n in _core.OPTION_NAMES if n != "max_episode_steps"] + ["render_mode"]
 #: The layout version of the `"features"` observation.
 FEATURES_VERSION: int = _core.FEATURES_VERSION

@@ -13,20 +13,10 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from . import _core, _signals
+from .options import ENV_OPTIONS, PYTHON_BOOL_OPTIONS
 
 #: Exit statuses of every command of the package (argparse's own usage errors are 2 too).
 FAILED, REFUSED = 1, 2
-
-#: Every option of the core (`Config::set`), as `--option` takes it, `max_episode_steps` included.
-CORE_OPTIONS: tuple[str, ...] = tuple(_core.OPTION_NAMES)
-#: The core's rules options (`OptionInfo::rule`): what decides the game, as opposed to how it is observed.
-RULE_OPTIONS: tuple[str, ...] = tuple(o["name"] for o in _core.OPTIONS if o["rule"])
-#: The core's observation settings: how the game is observed and drawn, which an action log does not record.
-OBSERVATION_OPTIONS: tuple[str, ...] = tuple(o["name"] for o in _core.OPTIONS if not o["rule"])
-#: Options the Python environments add to the core's (bools).
-PYTHON_BOOL_OPTIONS: tuple[str, ...] = ("keep_dim",)
-#: What `--option` takes by default: the options of `gymnasium.make("ChopperScape-v0", ...)`.
-ENV_OPTIONS: tuple[str, ...] = CORE_OPTIONS + PYTHON_BOOL_OPTIONS
 
 
 def option_value(name: str, text: str) -> Any:

@@ -184,7 +184,7 @@ def fit_regressor(
     import torch
     from torch import nn
 
-    from chopperscape.learn.model import CnnAgent, build_agent
+    from chopperscape.learn.networks import CnnAgent, build_agent
 
     torch.manual_seed(seed)
     mask = slot_mask(train.features)
@@ -291,7 +291,7 @@ def clone_rows(
     import torch
 
     from chopperscape.learn import episodes
-    from chopperscape.learn.model import build_agent
+    from chopperscape.learn.networks import build_agent
     from chopperscape.policies import VectorPolicy
 
     majority = int(np.bincount(train.labels, minlength=5).argmax())
@@ -365,7 +365,7 @@ def clone_rows(
 
 
 def run_size(size: int, args: argparse.Namespace, extra: dict[str, Any]) -> list[dict[str, Any]]:
-    from chopperscape._cli import RULE_OPTIONS
+    from chopperscape.options import RULE_OPTIONS
 
     t0, c0 = time.monotonic(), time.process_time()
     pixel_options: dict[str, Any] = dict(obs_type="grayscale", frame_stack=4, frame_skip=4)

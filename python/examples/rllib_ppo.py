@@ -254,7 +254,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     except ValueError:
         p.error(f"--hidden must be comma-separated integers such as 64,64, got {args.hidden!r}")
     if args.export is not None:
-        from chopperscape.learn.export import check_out
+        from chopperscape.policyfile import check_out
 
         try:
             check_out(Path(args.export), force=True)

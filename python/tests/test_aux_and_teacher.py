@@ -19,7 +19,7 @@ def test_auxiliary_features_train_the_trunk_only_and_leave_no_trace_in_the_model
     the saved model is an ordinary pixel model (no extra head) that evaluate plays. Refused for the features MLP."""
     import torch
 
-    from chopperscape.learn import model, train
+    from chopperscape.learn import modelfile, networks, train
 
     base = ["--preset", "pixels", "--steps", "600", "--num-envs", "4", "--num-steps", "32", "--seed", "5"]
     base += ["--option", "obs_size=42x42", "--option", "max_fuel=120"]
@@ -36,7 +36,7 @@ def test_auxiliary_features_train_the_trunk_only_and_leave_no_trace_in_the_model
     assert train.main([*base, "--out", str(tmp_path / "faint"), "--aux-coef", "1e-30"]) == 0
     faint = torch.load(tmp_path / "faint" / "model.pt", weights_only=True)
     assert not torch.equal(aux["actor"]["0.1.weight"], faint["actor"]["0.1.weight"])
-    assert isinstance(model.agent_from_checkpoint(aux), model.CnnAgent)
+    assert isinstance(modelfile.agent_from_checkpoint(aux), networks.CnnAgent)
     # The twin runs the same game: with equal seeds and actions, every reward and end matched (else it raises).
     rows = progress_rows(tmp_path / "aux" / "progress.csv")
     assert rows and int(rows[-1]["episodes"]) > 0
@@ -54,15 +54,15 @@ def _teacher_file(path, rules, favourite=3):
     output layer), on the rules options `rules`."""
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile, networks, normalize
     from chopperscape.learn.recipe import Recipe
 
     torch.manual_seed(0)
-    agent = model.build_agent("mlp", (46,), hidden=16)
+    agent = networks.build_agent("mlp", (46,), hidden=16)
     with torch.no_grad():
         agent.actor[-1].bias[favourite] = 8.0
     recipe = Recipe(obs_type="features", env_options=dict(rules), hidden=16)
-    model.save(path, agent, model.ObsNormalizer((46,), True), recipe, (46,), 0)
+    modelfile.save(path, agent, normalize.ObsNormalizer((46,), True), recipe, (46,), 0)
     return path
 
 
@@ -79,7 +79,7 @@ def test_a_teacher_pulls_the_pixel_policy_toward_it_and_changes_nothing_at_weigh
     the teacher's action; the saved model is a plain pixel model."""
     import torch
 
-    from chopperscape.learn import model, train
+    from chopperscape.learn import modelfile, train
 
     rules = {"frame_skip": 2, "max_fuel": 150}
     teacher = _teacher_file(tmp_path / "teacher.pt", rules)
@@ -103,7 +103,7 @@ def test_a_teacher_pulls_the_pixel_policy_toward_it_and_changes_nothing_at_weigh
     # The taught policy flies Up (the teacher's action) from frames it has never seen; the plain one does not.
     frames = torch.randint(0, 256, (64, 42, 42, 4), dtype=torch.uint8)
     for run, want in (("taught", True), ("plain", False)):
-        agent = model.load(tmp_path / run / "model.pt").agent
+        agent = modelfile.load(tmp_path / run / "model.pt").agent
         with torch.no_grad():
             up = (agent.actor(frames).argmax(-1) == 3).float().mean().item()
         assert (up > 0.9) is want, (run, up)

@@ -46,13 +46,15 @@ def make_pixel_model(path: pathlib.Path) -> None:
     models do: what `crates/policy/tests/data/pixels-untrained.onnx` is the export of."""
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile, networks, normalize
     from chopperscape.learn.recipe import PRESETS, Recipe
 
     torch.manual_seed(0)
     shape = (84, 84, 4)
     recipe = Recipe(**PRESETS["pixels-teacher"], invert_frames=False)
-    model.save(path, model.build_agent("small", shape, 5), model.ObsNormalizer(shape, False), recipe, shape, 0)
+    modelfile.save(
+        path, networks.build_agent("small", shape, 5), normalize.ObsNormalizer(shape, False), recipe, shape, 0
+    )
 
 
 def metadata(path: pathlib.Path) -> dict[str, str]:
@@ -111,7 +113,7 @@ def test_export_maps_raw_observations_to_torchs_logits(tmp_path, capsys):
     assert result["checked"] and result["observations"] == 1000 and result["max_abs_diff"] <= 1e-5
     # The committed export (0.1.0) has every key but the training seeds, which the model file records.
     meta = metadata(out)
-    from chopperscape.learn.model import load
+    from chopperscape.learn.modelfile import load
 
     recipe = load(MODEL).recipe
     assert json.loads(meta.pop("train_seeds")) == [[recipe["seed"], recipe["num_envs"]]]

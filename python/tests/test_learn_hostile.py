@@ -19,7 +19,8 @@ torch = pytest.importorskip("torch", reason="torch is not installed (scripts/tes
 from chopperscape import _atomic, _core  # noqa: E402
 from chopperscape.learn import evaluate as ev  # noqa: E402
 from chopperscape.learn import export as ex  # noqa: E402
-from chopperscape.learn import model, seeds, train  # noqa: E402
+from chopperscape.learn import modelfile, networks, normalize, seeds, train  # noqa: E402
+from chopperscape.learn import run as run_module  # noqa: E402
 from chopperscape.learn.recipe import RESERVED_OPTIONS, Recipe  # noqa: E402
 
 #: A recipe that runs an update in a fraction of a second.
@@ -56,7 +57,7 @@ def one_line(err: str) -> str:
 def small_model(path: pathlib.Path, **recipe) -> pathlib.Path:
     """A features model file as the trainer writes it (hidden 8)."""
     r = Recipe(hidden=8, **recipe)
-    model.save(path, model.Agent(46, 5, 8), model.ObsNormalizer((46,)), r, (46,), 0)
+    modelfile.save(path, networks.Agent(46, 5, 8), normalize.ObsNormalizer((46,)), r, (46,), 0)
     return path
 
 
@@ -227,7 +228,7 @@ def test_force_over_a_finished_run_never_leaves_a_folder_mixing_two_runs(tmp_pat
     def die(*a, **k):
         raise Killed
 
-    monkeypatch.setattr(train, "save", die)  # killed before its first save
+    monkeypatch.setattr(run_module, "save", die)  # killed before its first save
     with pytest.raises(Killed):
         train.main(["--out", str(run), "--steps", "128", "--seed", "7", *SMALL, "--force"])
     err = capsys.readouterr().err

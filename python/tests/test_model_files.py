@@ -53,17 +53,17 @@ def test_a_crafted_model_pt_runs_no_code_in_either_pickle_form(tmp_path, capsys)
 def test_recipe_models_load_with_weights_only(tmp_path, capsys):
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile, networks, normalize
     from chopperscape.learn.recipe import Recipe
 
     # The committed policy and a freshly saved one are tensors and plain data.
     committed = torch.load(ROOT / "models" / "ppo-features.pt", map_location="cpu", weights_only=True)
     assert committed["format"] == "chopperscape-ppo/1"
     recipe = Recipe(hidden=8, env_options={"obs_size": (84, 84), "max_fuel": 300})
-    agent = model.Agent(46, 5, 8)
-    norm = model.ObsNormalizer((46,))
+    agent = networks.Agent(46, 5, 8)
+    norm = normalize.ObsNormalizer((46,))
     norm.rms.update(torch.rand(10, 46).numpy())
-    model.save(tmp_path / "model.pt", agent, norm, recipe, (46,), 123)
+    modelfile.save(tmp_path / "model.pt", agent, norm, recipe, (46,), 123)
     back = torch.load(tmp_path / "model.pt", map_location="cpu", weights_only=True)
     assert back["recipe"]["env_options"] == {"obs_size": [84, 84], "max_fuel": 300} and back["env_steps"] == 123
     assert not list(tmp_path.glob(".*part"))
@@ -77,9 +77,9 @@ def test_recipe_models_load_with_weights_only(tmp_path, capsys):
 def test_every_committed_model_loads_as_data_and_plays_under_its_own_options(name, capsys):
     """Each `models/*.pt` (the features policy, the frame-skip-4 teacher, the pixel policy) is tensors and plain
     data, and `evaluate` plays it with the options it was trained with (frame skip, frame size and stack)."""
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile
 
-    loaded = model.load(ROOT / "models" / name)
+    loaded = modelfile.load(ROOT / "models" / name)
     assert evaluate(ROOT / "models" / name, "--episodes", "2", "--option", "max_episode_steps=40") == 0
     out = json.loads(capsys.readouterr().out)
     assert out["episodes"] == 2 and out["mean_return"] > 0
@@ -97,10 +97,12 @@ def torch_payload(path):
 
 @needs_torch
 def test_a_model_whose_input_does_not_fit_the_options_is_a_clear_error(tmp_path, capsys):
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile, networks, normalize
     from chopperscape.learn.recipe import Recipe
 
-    model.save(tmp_path / "model.pt", model.Agent(46, 5, 8), model.ObsNormalizer((46,)), Recipe(hidden=8), (46,), 0)
+    modelfile.save(
+        tmp_path / "model.pt", networks.Agent(46, 5, 8), normalize.ObsNormalizer((46,)), Recipe(hidden=8), (46,), 0
+    )
     assert evaluate(tmp_path / "model.pt", "--episodes", "1", "--option", "frame_stack=2") == 2
     err = capsys.readouterr().err
     assert "takes observations of shape (46,)" in err and "(92,)" in err and "Traceback" not in err, err

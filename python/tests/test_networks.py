@@ -1,4 +1,4 @@
-"""The recipe's networks (`chopperscape.learn.model`): what observations each takes, the CNN's shared trunk, and the
+"""The recipe's networks (`chopperscape.learn.networks`): what observations each takes, the CNN's shared trunk, and the
 frames it reads (inverted since 0.2; 0.1.0's checkpoints keep plain frames)."""
 
 from __future__ import annotations
@@ -9,16 +9,16 @@ from conftest import needs_torch
 
 def test_networks_refuse_observations_they_cannot_take():
     pytest.importorskip("torch")
-    from chopperscape.learn import model
+    from chopperscape.learn import networks
 
     with pytest.raises(ValueError, match="mlp network takes vector observations"):
-        model.build_agent("mlp", (84, 84, 4))
+        networks.build_agent("mlp", (84, 84, 4))
     with pytest.raises(ValueError, match="takes grayscale frames"):
-        model.build_agent("small", (46,))
+        networks.build_agent("small", (46,))
     with pytest.raises(ValueError, match="too small"):
-        model.build_agent("nature", (16, 16, 4))
+        networks.build_agent("nature", (16, 16, 4))
     with pytest.raises(ValueError, match="allowed 'auto', 'mlp', 'small', 'nature', 'small-split'"):
-        model.build_agent("resnet", (84, 84, 4))
+        networks.build_agent("resnet", (84, 84, 4))
 
 
 @needs_torch
@@ -28,10 +28,10 @@ def test_cnn_act_runs_the_trunk_once_and_matches_both_heads(network, shape):
     `critic`); its log-probabilities, entropy, value and gradients are those of the two heads called apart."""
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import networks
 
     torch.manual_seed(0)
-    agent = model.build_agent(network, shape)
+    agent = networks.build_agent(network, shape)
     x = torch.randint(0, 256, (6, *shape), dtype=torch.uint8)
     actions = torch.tensor([0, 1, 2, 3, 4, 0])
     trunk = agent.actor[0]
@@ -64,14 +64,14 @@ def test_small_split_gives_the_critic_a_trunk_of_its_own(tmp_path):
     gradient never reaches the actor's; `act` runs each trunk once and matches the heads."""
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import networks
 
     torch.manual_seed(0)
-    agent = model.build_agent("small-split", (42, 42, 4))
+    agent = networks.build_agent("small-split", (42, 42, 4))
     actor_trunk, critic_trunk = agent.actor[0], agent.critic[0]
     assert not {id(p) for p in actor_trunk.parameters()} & {id(p) for p in critic_trunk.parameters()}
     assert not torch.equal(actor_trunk[1].weight, critic_trunk[1].weight)
-    shared = model.build_agent("small", (42, 42, 4))
+    shared = networks.build_agent("small", (42, 42, 4))
     assert sum(p.numel() for p in agent.parameters()) == sum(p.numel() for p in shared.parameters()) + sum(
         p.numel() for p in shared.actor[0].parameters()
     )
@@ -94,33 +94,33 @@ def test_cnn_reads_inverted_frames_and_old_models_keep_plain_ones(tmp_path):
     `invert_frames`, is rebuilt reading ``frame / 255`` and gives the logits it was saved with."""
     import torch
 
-    from chopperscape.learn import model
+    from chopperscape.learn import modelfile, networks, normalize
     from chopperscape.learn.recipe import Recipe
 
     x = torch.tensor([[[0, 51], [255, 204]]], dtype=torch.uint8)
-    torch.testing.assert_close(model.Frames(invert=True)(x), 1 - x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
-    torch.testing.assert_close(model.Frames()(x), x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    torch.testing.assert_close(networks.Frames(invert=True)(x), 1 - x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
+    torch.testing.assert_close(networks.Frames()(x), x.unsqueeze(1).float() / 255, rtol=0, atol=1e-6)
     assert Recipe().invert_frames is True
     shape = (42, 42, 2)
     frames = torch.randint(0, 256, (5, *shape), dtype=torch.uint8)
     for invert in (True, False):
         torch.manual_seed(3)
-        agent = model.build_agent("small", shape, invert_frames=invert)
+        agent = networks.build_agent("small", shape, invert_frames=invert)
         recipe = Recipe(obs_type="grayscale", network="small", invert_frames=invert)
         path = tmp_path / f"invert-{invert}.pt"
-        model.save(path, agent, model.ObsNormalizer(shape, False), recipe, shape, 0)
+        modelfile.save(path, agent, normalize.ObsNormalizer(shape, False), recipe, shape, 0)
         if not invert:  # as 0.1.0 wrote it: no such key
             payload = torch.load(path, weights_only=True)
             del payload["recipe"]["invert_frames"]
             torch.save(payload, path)
-        loaded = model.load(path).agent
+        loaded = modelfile.load(path).agent
         assert cast_frames(loaded).invert is invert
         torch.testing.assert_close(loaded.actor(frames), agent.actor(frames), rtol=0, atol=0)
     # The two readings are different inputs: the same weights give other logits.
     torch.manual_seed(3)
-    plain = model.build_agent("small", shape)
+    plain = networks.build_agent("small", shape)
     torch.manual_seed(3)
-    inverted = model.build_agent("small", shape, invert_frames=True)
+    inverted = networks.build_agent("small", shape, invert_frames=True)
     assert not torch.allclose(plain.actor(frames), inverted.actor(frames))
 
 

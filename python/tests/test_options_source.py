@@ -163,13 +163,13 @@ def test_each_option_value_has_the_tables_rust_type():
 
 
 def test_the_python_lists_of_options_derive_from_the_core():
-    from chopperscape import _cli
+    from chopperscape import options
 
     rows = rust_table()
-    assert _cli.CORE_OPTIONS == tuple(r["name"] for r in rows)
-    assert _cli.RULE_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "rule")
-    assert _cli.OBSERVATION_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "observation")
-    assert set(_cli.ENV_OPTIONS) == set(_cli.CORE_OPTIONS) | set(_cli.PYTHON_BOOL_OPTIONS)
+    assert options.CORE_OPTIONS == tuple(r["name"] for r in rows)
+    assert options.RULE_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "rule")
+    assert options.OBSERVATION_OPTIONS == tuple(r["name"] for r in rows if r["role"] == "observation")
+    assert set(options.ENV_OPTIONS) == set(options.CORE_OPTIONS) | set(options.PYTHON_BOOL_OPTIONS)
 
 
 def test_python_keywords_reach_every_option_of_the_table():

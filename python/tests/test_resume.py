@@ -42,12 +42,14 @@ class _Clock:
 
 
 def _stopped_then_resumed(recipe, out: Path, stop_after_s: float, monkeypatch) -> None:
+    import chopperscape.learn.run as run
+    import chopperscape.learn.state as state
     import chopperscape.learn.train as train
 
     with monkeypatch.context() as m:
         clock = _Clock()
-        m.setattr(train.time, "monotonic", clock.monotonic)
-        m.setattr(train, "CHECKPOINT_EVERY", 2)
+        m.setattr(state.time, "monotonic", clock.monotonic)
+        m.setattr(run, "CHECKPOINT_EVERY", 2)
         train.train(recipe, out, minutes=stop_after_s / 60)
     assert (out / "resume.pt").exists()
     train.train(recipe, out, resume=True)
@@ -158,7 +160,7 @@ def test_the_progress_csv_of_a_resumed_run_drops_the_rows_after_its_checkpoint(t
 def test_random_shift_crops_the_edge_padded_frames():
     import torch
 
-    from chopperscape.learn.model import random_shift, shift_pad
+    from chopperscape.learn.augment import random_shift, shift_pad
 
     assert (shift_pad((84, 84, 4)), shift_pad((42, 42, 4)), shift_pad((16, 16))) == (4, 2, 1)
     x = torch.from_numpy(np.random.default_rng(0).integers(0, 256, (6, 12, 10, 3), dtype=np.uint8))

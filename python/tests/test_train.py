@@ -95,7 +95,7 @@ def test_progress_diagnostics_are_sane(tmp_path):
 @needs_torch
 def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     import chopperscape
-    from chopperscape.learn import evaluate, model, train
+    from chopperscape.learn import evaluate, modelfile, networks, train
 
     # The pixel preset (frames alone, the 42×42 agent view) at a smoke size: few envs, few steps; the same code
     # path as the full recipe. Resuming it is test_resume's.
@@ -135,20 +135,20 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
     # layout (version 2: the art; version 1: the art and the text HUD), its own options over those.
     later = chopperscape.PIXELS_VERSION + 1
     with pytest.raises(ValueError, match=f"pixel layout v{later}, and this chopperscape draws v{later - 1}"):
-        model.agent_from_checkpoint({**payload, "pixels_version": later})
-    assert model.from_payload({**payload, "pixels_version": 2}).recipe["env_options"]["look"] == "art"
-    old = model.from_payload({**payload, "pixels_version": 1}).recipe["env_options"]
+        modelfile.agent_from_checkpoint({**payload, "pixels_version": later})
+    assert modelfile.from_payload({**payload, "pixels_version": 2}).recipe["env_options"]["look"] == "art"
+    old = modelfile.from_payload({**payload, "pixels_version": 1}).recipe["env_options"]
     assert (old["look"], old["hud_style"], old["max_fuel"]) == ("art", "text", 300)
-    assert "look" not in model.from_payload(payload).recipe["env_options"]
-    agent = model.agent_from_checkpoint(payload)
-    assert isinstance(agent, model.CnnAgent)
+    assert "look" not in modelfile.from_payload(payload).recipe["env_options"]
+    agent = modelfile.agent_from_checkpoint(payload)
+    assert isinstance(agent, networks.CnnAgent)
     # The frame skip, stack and size came back from the model: evaluation plays the frames it was trained on.
     assert evaluate.main([str(out / "model.pt"), "--episodes", "2", "--seed", "9", "--per-episode"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["episodes"] == 2 and all(e["return"] % 4 == 0 or e["cause"] == "bird" for e in res["per_episode"])
     # Reloading gives the same greedy actions on the same frames.
     env_obs = np.random.default_rng(0).integers(0, 256, (3, 42, 42, 4), dtype=np.uint8)
-    again = model.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
+    again = modelfile.agent_from_checkpoint(torch.load(out / "model.pt", weights_only=True))
     with torch.no_grad():
         assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
 

@@ -14,7 +14,7 @@ import time
 import pytest
 
 torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
-from chopperscape.learn import model, train  # noqa: E402
+from chopperscape.learn import networks, train  # noqa: E402
 from chopperscape.learn.recipe import Recipe  # noqa: E402
 
 #: A recipe that runs an update in a fraction of a second.
@@ -134,7 +134,7 @@ def test_ctrl_c_saves_the_model_reached_so_far_and_leaves_no_temporary_file(tmp_
 def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatch):
     made = []
 
-    class Poisoned(model.Agent):
+    class Poisoned(networks.Agent):
         def __init__(self, *a):
             super().__init__(*a)
             made.append(self)
@@ -142,7 +142,7 @@ def test_a_nan_loss_stops_the_run_before_the_optimiser_step(tmp_path, monkeypatc
         def value(self, x):
             return super().value(x) * float("nan")
 
-    monkeypatch.setattr(model, "Agent", Poisoned)
+    monkeypatch.setattr(networks, "Agent", Poisoned)
     recipe = Recipe(num_envs=4, num_steps=32, hidden=8, num_minibatches=2, total_steps=10_000)
     with pytest.raises(FloatingPointError, match="loss became nan"):
         train.train(recipe, tmp_path / "run")

@@ -4,7 +4,7 @@
 //! - `pixels-untrained.onnx`: the pixel recipe's CNN (84 × 84 × 4 grayscale, frame_skip 4), untrained (torch
 //!   seed 0), exported by `chopperscape.learn.export` (see `python/tests/test_export.py::make_pixel_model`).
 //! - `ppo-features.logits.json`: 64 observations met by `models/ppo-features.pt` playing (seeds 5..13), and
-//!   torch's logits for them: `export.record_observations(payload, agent, norm, options, n=64, seed=5)` and
+//!   torch's logits for them: `policyfile.record_observations(...)` and
 //!   `agent.actor(torch.from_numpy(norm(obs)))`.
 
 use chopperscape::{ChopperScape, Config, Env, ObsData, ObsType, Observation};

@@ -7,8 +7,9 @@ import json
 import sys
 from pathlib import Path
 
-from .._cli import ENV_OPTIONS, parse_options, print_line, run_command
+from .._cli import parse_options, print_line, run_command
 from ..modes import MODES
+from ..options import ENV_OPTIONS
 from . import evaluate, protocol, report, results
 
 

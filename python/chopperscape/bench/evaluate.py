@@ -34,8 +34,8 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import __version__, _atomic, modes
-from ..learn.export import TRAIN_SEEDS
 from ..policies import NAMES, VectorPolicy
+from ..policyfile import TRAIN_SEEDS
 from ..vector import VectorEnv
 from . import protocol, results
 
@@ -118,7 +118,7 @@ def load(
         act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle, algo)
         info.update(kind="sb3", recipe={"algorithm": algo})
         return Loaded(act, played, info)
-    from ..learn.model import load as load_model
+    from ..learn.modelfile import load as load_model
 
     recipe = load_model(path).recipe
     info.update(kind="recipe", recipe=recipe)

@@ -387,13 +387,12 @@ def export_onnx(
     is written whole or not at all. Returns what was written and checked. `ValueError` for a bad `out`."""
     import torch
 
-    from .. import FEATURES_VERSION, PIXELS_VERSION
-    from ..learn import export
-    from ..learn.episodes import observation_shape
+    from .. import FEATURES_VERSION, PIXELS_VERSION, policyfile
     from ..modes import with_mode
+    from ..policyfile import observation_shape
 
     out = Path(out)
-    export.check_out(out, force)
+    policyfile.check_out(out, force)
     config = dict(env_config)
     obs_type = config.pop("obs_type", "features")
     name = config.pop("mode", None)
@@ -430,7 +429,7 @@ def export_onnx(
 
     policy = Policy().eval()
     dtype = torch.uint8 if obs_type in ("rgb", "grayscale") else torch.float32
-    props = export.metadata(
+    props = policyfile.metadata(
         obs_type,
         shape,
         options,
@@ -444,10 +443,10 @@ def export_onnx(
         with torch.no_grad():
             return policy(torch.from_numpy(obs)).numpy()
 
-    data = export.to_onnx(policy, torch.zeros((2, *shape), dtype=dtype), props)
+    data = policyfile.to_onnx(policy, torch.zeros((2, *shape), dtype=dtype), props)
     result: dict[str, Any] = {"out": str(out), "obs_type": obs_type, "obs_shape": list(shape), "bytes": len(data)}
-    result.update(export.check_logits(data, logits, obs_type, options))
-    export.write(out, data)
+    result.update(policyfile.check_logits(data, logits, obs_type, options))
+    policyfile.write(out, data)
     return result
 
 

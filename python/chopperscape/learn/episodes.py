@@ -12,7 +12,6 @@ import math
 from collections.abc import Iterable, Iterator
 from typing import Any, Callable
 
-import gymnasium as gym
 import numpy as np
 
 from ..vector import VectorEnv
@@ -130,18 +129,3 @@ def summary(results: Iterable[dict[str, Any]]) -> dict[str, Any]:
     for r in results:
         acc.add(r)
     return acc.result()
-
-
-def observation_space(options: dict[str, Any]) -> gym.Space:
-    """The observation space of one env with `options` (a `ValueError` naming a bad option)."""
-    options = {"max_episode_steps": None, **options}
-    envs = VectorEnv(1, num_threads=1, **options)
-    try:
-        return envs.single_observation_space
-    finally:
-        envs.close()
-
-
-def observation_shape(options: dict[str, Any]) -> tuple[int, ...]:
-    """The observation shape of one env with `options` (a `ValueError` naming a bad option)."""
-    return tuple(observation_space(options).shape or ())

@@ -37,36 +37,30 @@ full disk: nothing is left behind).
 from __future__ import annotations
 
 import argparse
-import io
 import json
 import os
 import sys
-import warnings
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from .. import _atomic
 from .._cli import print_line, run_command
-
-#: The format written into `metadata_props["format"]` (the Rust crate reads this one).
-FORMAT = "chopperscape-policy/1"
-#: Observations the check compares logits on, and the largest difference allowed.
-CHECK_OBSERVATIONS = 1000
-CHECK_TOLERANCE = 1e-5
-#: ONNX operator set of the export: within what tract is tested against (9 to 18).
-OPSET = 17
-#: The optional `metadata_props` key of the reset-seed ranges a policy was trained on, JSON `[[first, count], ...]`:
-#: `python -m chopperscape.bench evaluate` refuses a policy whose ranges reach the evaluation seeds.
-TRAIN_SEEDS = "train_seeds"
+from ..policyfile import (
+    check_logits,
+    check_out,
+    metadata,
+    observation_shape,
+    to_onnx,
+    write,
+)
 
 
 def load(path: Path):
     """`(payload, agent, norm, env_options, env_shape)` of a recipe model; `ValueError` with one line for a
     missing file, one that is not a recipe model, or one that holds more than tensors and plain data."""
-    from .episodes import observation_shape
-    from .model import from_payload, read_checkpoint
+    from .modelfile import from_payload, read_checkpoint
 
     what = f"model file {str(path)!r}"
     if not os.path.lexists(path):
@@ -75,7 +69,7 @@ def load(path: Path):
     agent, model_shape, norm, recipe = from_payload(payload, what)
     # The env's own observation (the Rust env has no `keep_dim`: a grayscale frame without a channel axis).
     # The options it was trained with, as written in the file: a policy of an older pixel layout says so by its
-    # `pixels_version`, and every loader (the policy crate, `model.learned_options`) draws it that layout.
+    # `pixels_version`, and every loader (the policy crate, `modelfile.learned_options`) draws it that layout.
     options = {k: v for k, v in payload["recipe"].get("env_options", {}).items() if k != "keep_dim"}
     env_shape = observation_shape({"obs_type": recipe["obs_type"], **options})
     if int(np.prod(env_shape)) != int(np.prod(model_shape)):
@@ -109,129 +103,9 @@ def _policy_module(agent, norm, model_shape: tuple[int, ...], env_shape: tuple[i
     return Policy().eval()
 
 
-def record_observations(
-    logits: Callable[[np.ndarray], np.ndarray],
-    obs_type: str,
-    options: dict[str, Any],
-    n: int = CHECK_OBSERVATIONS,
-    seed: int = 0,
-) -> np.ndarray:
-    """`n` raw observations met by playing the env greedily by `logits` (a raw observation batch to the actions'
-    logits), 8 envs from seeds `seed + i`, autoreset."""
-    from ..vector import VectorEnv
-
-    envs = VectorEnv(8, num_threads=1, obs_type=obs_type, **options)
-    try:
-        obs, _ = envs.reset(seed=seed)
-        seen = [obs.copy()]
-        while sum(len(o) for o in seen) < n:
-            obs, *_ = envs.step(np.asarray(logits(obs)).argmax(-1).astype(np.int64))
-            seen.append(obs.copy())
-    finally:
-        envs.close()
-    return np.concatenate(seen)[:n]
-
-
 def payload_shape(payload: dict[str, Any]) -> tuple[int, ...]:
     """One observation's shape as the model takes it."""
     return tuple(payload.get("obs_shape") or (payload["obs_dim"],))
-
-
-def check_out(out: Path, force: bool) -> None:
-    """`ValueError` naming `--out` when the ONNX file cannot go there: its folder is missing or a file, it is a
-    folder, or it exists and `force` is not given."""
-    out_dir = out.parent if str(out.parent) else Path(".")
-    if not out_dir.is_dir():
-        why = "is not a folder" if os.path.lexists(out_dir) else "does not exist"
-        raise ValueError(f"--out {str(out)!r}: {str(out_dir)!r} {why}")
-    if out.is_dir():
-        raise ValueError(f"--out {str(out)!r} is a folder: give the ONNX file to write (NAME.onnx)")
-    if os.path.lexists(out) and not force:
-        raise ValueError(f"--out {str(out)!r} exists: pass --force to replace it")
-
-
-def metadata(
-    obs_type: str,
-    env_shape: tuple[int, ...],
-    options: dict[str, Any],
-    *,
-    source_sha256: str,
-    features_version: int,
-    pixels_version: int,
-    train_seeds: list[tuple[int, int]] | None = None,
-) -> dict[str, str]:
-    """The `metadata_props` of an exported policy (the module's docs; `crates/policy/src/metadata.rs` reads
-    them). `train_seeds`: the reset-seed ranges `(first, count)` it was trained on, when known."""
-    props = {
-        "format": FORMAT,
-        "obs_type": obs_type,
-        "obs_shape": json.dumps(list(env_shape)),
-        "env_options": json.dumps(options, sort_keys=True),
-        "features_version": str(features_version),
-        "pixels_version": str(pixels_version),
-        "source_sha256": source_sha256,
-    }
-    if train_seeds is not None:
-        props[TRAIN_SEEDS] = json.dumps([[int(first), int(count)] for first, count in train_seeds])
-    return props
-
-
-def to_onnx(module, example, props: dict[str, str]) -> bytes:
-    """`module` (raw observation batch to logits) as a checked ONNX graph, traced on `example`: input `obs`,
-    output `logits`, the batch axis free, `props` as its `metadata_props`."""
-    import onnx
-    import torch
-
-    # The TorchScript exporter: the graph of these small static networks needs nothing of torch.export's
-    # (control flow, dynamic shapes), and it needs no onnxscript. torch 2.9+ warns that it is the legacy one.
-    # Built in memory and checked there; the caller writes it once, whole (`_atomic`), or not at all.
-    buffer = io.BytesIO()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        torch.onnx.export(
-            module,
-            (example,),
-            buffer,  # type: ignore[arg-type]  # file objects are taken (torch.onnx.export docs: `f`)
-            input_names=["obs"],
-            output_names=["logits"],
-            dynamic_axes={"obs": {0: "batch"}, "logits": {0: "batch"}},
-            opset_version=OPSET,
-            dynamo=False,
-        )
-    graph = onnx.load_from_string(buffer.getvalue())
-    del graph.metadata_props[:]
-    for key, value in props.items():
-        graph.metadata_props.add(key=key, value=value)
-    graph.producer_name = "chopperscape.learn.export"
-    onnx.checker.check_model(graph)
-    return graph.SerializeToString()
-
-
-def check_logits(
-    onnx_model: bytes, logits: Callable[[np.ndarray], np.ndarray], obs_type: str, options: dict[str, Any]
-) -> dict[str, Any]:
-    """Compares the export's logits with `logits` (the source policy's, raw observations in) on
-    `CHECK_OBSERVATIONS` observations recorded by playing it; `RuntimeError` when they differ by more than
-    `CHECK_TOLERANCE`. Skipped (and said so) without onnxruntime, before anything is played."""
-    try:
-        import onnxruntime
-    except ImportError:
-        return {"checked": False, "why": "onnxruntime is not installed (pip install onnxruntime)"}
-    obs = record_observations(logits, obs_type, options)
-    session = onnxruntime.InferenceSession(onnx_model, providers=["CPUExecutionProvider"])
-    got = session.run(["logits"], {"obs": obs})[0]
-    diff = float(np.max(np.abs(got - logits(obs))))
-    if not diff <= CHECK_TOLERANCE:
-        raise RuntimeError(f"the export's logits differ from torch's by {diff:.3g} (allowed {CHECK_TOLERANCE})")
-    return {"checked": True, "observations": len(obs), "max_abs_diff": diff}
-
-
-def write(out: Path, data: bytes) -> None:
-    """Writes the export `data` to `out` whole or not at all; `ExportWriteError` naming `out` otherwise."""
-    try:
-        _atomic.write_bytes(out, data)
-    except OSError as e:
-        raise ExportWriteError(f"cannot write {str(out)!r}: {e.strerror or e}; nothing was written") from None
 
 
 def export(model: Path, out: Path, force: bool = False, check: bool = True) -> dict[str, Any]:
@@ -275,10 +149,6 @@ def export(model: Path, out: Path, force: bool = False, check: bool = True) -> d
         result.update(check_export(data, payload, agent, norm, options))
     write(out, data)
     return result
-
-
-class ExportWriteError(OSError):
-    """The export could not be written (a read-only folder, a full disk): the message names `--out`."""
 
 
 def check_export(onnx_model: bytes, payload: dict[str, Any], agent, norm, options: dict[str, Any]) -> dict[str, Any]:

@@ -8,8 +8,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .._cli import ENV_OPTIONS, env_options
+from .._cli import env_options
 from ..modes import MODES, with_mode
+from ..options import ENV_OPTIONS
 from .recipe import (
     DEFAULT_STEPS,
     PRESETS,

@@ -18,11 +18,14 @@ import numpy as np
 import torch
 from torch import nn
 
-from .. import _core
-from .._cli import RULE_OPTIONS
+from .. import NUM_ACTIONS, _core
+from ..options import RULE_OPTIONS
 from ..vector import VectorEnv
-from .model import CnnAgent, Model, ObsNormalizer, load
+from .modelfile import Model, load
+from .networks import CnnAgent
+from .normalize import ObsNormalizer
 from .recipe import Recipe
+from .state import EnvBatch
 
 
 def _rules(options: dict) -> dict:
@@ -64,7 +67,8 @@ class Guidance:
     """The twin env, the auxiliary head and the teacher of one run, with their rollout buffers.
 
     The loop calls :meth:`reset` with the envs, :meth:`store` before each env step, :meth:`step` after it with the
-    same actions, :meth:`flatten` once per update and :meth:`loss` per minibatch; :meth:`close` at the end."""
+    same actions, :meth:`flatten` once per update and :meth:`loss` per minibatch; :meth:`close` at the end. The
+    same calls on :class:`~.parts.Unguided` do nothing: plain PPO's loop is this one."""
 
     def __init__(self, recipe: Recipe, agent: CnnAgent, teacher: Model | None, t_len: int, device: torch.device):
         self.recipe, self.teacher, self.device = recipe, teacher, device
@@ -93,7 +97,7 @@ class Guidance:
         aux = self.aux_head is not None
         self.buf_feat = torch.zeros((t_len, n, self.feat_dim) if aux else (0,), device=device)
         # The teacher's log-probabilities of the five actions in each stored state.
-        self.buf_teach = torch.zeros((t_len, n, 5) if teacher is not None else (0,), device=device)
+        self.buf_teach = torch.zeros((t_len, n, NUM_ACTIONS) if teacher is not None else (0,), device=device)
         self.next_feat = self.next_teach = torch.zeros(0)
         self.b_feat: torch.Tensor | None = None
         self.b_teach: torch.Tensor | None = None
@@ -132,13 +136,14 @@ class Guidance:
     def flatten(self, mask: torch.Tensor) -> None:
         """The update's batch of stored targets, over the valid steps `mask`."""
         self.b_feat = self.buf_feat.reshape(-1, self.feat_dim)[mask] if self.aux_head is not None else None
-        self.b_teach = self.buf_teach.reshape(-1, 5)[mask] if self.teacher is not None else None
+        self.b_teach = self.buf_teach.reshape(-1, NUM_ACTIONS)[mask] if self.teacher is not None else None
 
     def loss(
         self, idx: torch.Tensor, logits: torch.Tensor, h: torch.Tensor | None, env_steps: int
-    ) -> tuple[torch.Tensor, float, float]:
-        """The minibatch `idx`'s added loss, with the auxiliary loss and KL(teacher ‖ policy) it holds. The
-        teacher's weight falls linearly to 0 at `teacher_fade` × `total_steps` (env steps, as every schedule)."""
+    ) -> tuple[torch.Tensor, dict[str, float]]:
+        """The minibatch `idx`'s added loss, and by name the parts it holds that this run logs (`aux_loss`, and
+        `teacher_kl`, KL(teacher ‖ policy)). The teacher's weight falls linearly to 0 at `teacher_fade` ×
+        `total_steps` (env steps, as every schedule)."""
         r = self.recipe
         zero = torch.zeros((), device=self.device)
         aux_loss = teacher_kl = zero
@@ -149,19 +154,26 @@ class Guidance:
             teacher_kl = (t_logp.exp() * (t_logp - torch.log_softmax(logits, -1))).sum(-1).mean()
         teach_w = r.teacher_coef * max(1.0 - env_steps / (r.teacher_fade * r.total_steps), 0.0)
         loss = r.aux_coef * aux_loss + (teach_w * teacher_kl if teach_w > 0 else zero)
-        return loss, aux_loss.item(), teacher_kl.item()
+        logged = {"aux_loss": aux_loss.item()} if self.aux_head is not None else {}
+        if self.teacher is not None:
+            logged["teacher_kl"] = teacher_kl.item()
+        return loss, logged
 
-    def state(self) -> dict[str, Any]:
+    def state_dict(self) -> dict[str, Any]:
         """What `--resume` needs to continue it: the twin's state, the targets' statistics and the next targets."""
-        out: dict[str, Any] = {"twin": env_state(self.twin), "next_feat": self.next_feat, "next_teach": self.next_teach}
+        out: dict[str, Any] = {
+            "twin": EnvBatch(self.twin).state_dict(),
+            "next_feat": self.next_feat,
+            "next_teach": self.next_teach,
+        }
         if self.feat_norm is not None:
             out["feat_rms"] = self.feat_norm.rms.state()
         if self.aux_head is not None:
             out["aux_head"] = self.aux_head.state_dict()
         return out
 
-    def load_state(self, s: dict[str, Any]) -> None:
-        set_env_state(self.twin, s["twin"])
+    def load_state_dict(self, s: dict[str, Any]) -> None:
+        EnvBatch(self.twin).load_state_dict(s["twin"])
         self.next_feat, self.next_teach = s["next_feat"].to(self.device), s["next_teach"].to(self.device)
         if self.feat_norm is not None:
             self.feat_norm.rms = type(self.feat_norm.rms).from_state(s["feat_rms"])
@@ -170,22 +182,3 @@ class Guidance:
 
     def close(self) -> None:
         self.twin.close()
-
-
-def env_state(envs: VectorEnv) -> dict[str, Any]:
-    """A vector env's whole state as tensors and plain data (what `torch.load(weights_only=True)` reads back)."""
-    started, each = envs.batch_state()
-    return {
-        "started": bool(started),
-        "snapshots": [torch.frombuffer(bytearray(b), dtype=torch.uint8) for b, _, _ in each],
-        "flags": [bool(f) for _, f, _ in each],
-        "steps": [int(k) for _, _, k in each],
-    }
-
-
-def set_env_state(envs: VectorEnv, s: dict[str, Any]) -> None:
-    """Puts `envs` in the state :func:`env_state` took; the core checks every snapshot (`ValueError` naming it)."""
-    each = [(bytes(t.numpy().tobytes()), f, k) for t, f, k in zip(s["snapshots"], s["flags"], s["steps"])]
-    if len(each) != envs.num_envs:
-        raise ValueError(f"the resume state holds {len(each)} envs, the run has {envs.num_envs}")
-    envs.set_batch_state(bool(s["started"]), each)

@@ -1,20 +1,26 @@
-"""Where a training loop's wall time goes: a stopwatch with one lap per phase of the loop.
+"""Where a training loop's wall time goes: a stopwatch that wraps the functions the loop calls, one phase each.
 
-:func:`chopperscape.learn.train.train` takes one (``phases=Phases()``) and calls :meth:`Phases.lap` at the end of each
-phase; ``python/bench_train.py`` prints the totals beside each phase's floor. Without one the loop uses
-:data:`OFF`, whose laps do nothing, so a training run pays a function call per lap and nothing else.
+:func:`chopperscape.learn.train.train` takes one (``phases=Phases()``) and, before its loop, passes the functions
+it calls through :meth:`Phases.timed`; the loop's text holds no timing. ``python/bench_train.py`` prints the totals
+beside each phase's floor. Without one the run uses :data:`OFF`, whose :meth:`~Phases.timed` gives each function
+back unchanged: a training run pays nothing.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 #: The phases of one update, in loop order. ``env``: `VectorEnv.step`; ``obs_norm``: observation normalisation and
 #: the copy into a tensor; ``forward``: the rollout's forward passes (action sampling included); ``bookkeeping``:
-#: the rest of a rollout step in Python (buffers, episode statistics, reward scaling); ``gae``: advantages and
-#: returns; ``update``: the epochs of minibatch forward + backward + Adam; ``logging``: the progress row and the
-#: checkpoint.
-PHASES = ("env", "obs_norm", "forward", "bookkeeping", "gae", "update", "logging")
+#: the rest of the loop in Python (buffers, episode statistics, reward scaling, the schedule: the loop's time less
+#: every other phase); ``gae``: advantages and returns; ``update_forward``: the update's forward passes and losses
+#: (augmentation and guidance included); ``backward``: their gradients; ``optimizer``: gradient clipping and
+#: Adam's step; ``logging``: the progress row and the checkpoint.
+PHASES = ("env", "obs_norm", "forward", "bookkeeping", "gae", "update_forward", "backward", "optimizer", "logging")
+
+_F = TypeVar("_F", bound=Callable)
 
 
 class Phases:
@@ -23,26 +29,42 @@ class Phases:
     def __init__(self) -> None:
         self.seconds = dict.fromkeys(PHASES, 0.0)
         self.steps = 0
-        self._last = time.perf_counter()
+        self._start = time.perf_counter()
+
+    def timed(self, phase: str, fn: _F) -> _F:
+        """`fn`, its wall time added to `phase` at each call."""
+        seconds = self.seconds
+
+        def wrapped(*args, **kwargs):
+            t = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                seconds[phase] += time.perf_counter() - t
+
+        return wrapped  # type: ignore[return-value]
 
     def start(self) -> None:
-        """Starts the clock (the time since the last lap, or since creation, is not counted)."""
-        self._last = time.perf_counter()
+        """Starts the loop's clock (what came before, the setup, is not counted)."""
+        self._start = time.perf_counter()
 
-    def lap(self, phase: str) -> None:
-        """Adds the time since the last lap (or `start`) to `phase`."""
-        now = time.perf_counter()
-        self.seconds[phase] += now - self._last
-        self._last = now
+    def finish(self, steps: int) -> None:
+        """Stops the loop's clock at `steps` env steps: the loop's time not in a timed phase is `bookkeeping`."""
+        self.steps = steps
+        timed = sum(v for k, v in self.seconds.items() if k != "bookkeeping")
+        self.seconds["bookkeeping"] = max(time.perf_counter() - self._start - timed, 0.0)
 
 
 class _Off(Phases):
     """A stopwatch that measures nothing (the default of a training run)."""
 
+    def timed(self, phase: str, fn: _F) -> _F:
+        return fn
+
     def start(self) -> None:
         pass
 
-    def lap(self, phase: str) -> None:
+    def finish(self, steps: int) -> None:
         pass
 
 

@@ -15,8 +15,8 @@ import numpy as np
 
 from .._checks import regular_file
 from ..policies import NAMES, VectorPolicy
+from ..policyfile import observation_shape, observation_space
 from ..vector import VectorEnv
-from .episodes import observation_shape, observation_space
 from .recipe import MAX_MODEL_BYTES
 
 
@@ -72,7 +72,7 @@ def load_recipe(path: Path, stochastic: bool, seed: int, env_options: dict[str, 
     # One thread: a small MLP gains nothing from more, and OpenMP spinning under load can slow it by 100x.
     torch.set_num_threads(1)
     what = f"model file {str(path)!r}"
-    from .model import load
+    from .modelfile import load
 
     agent, model_shape, norm, recipe = load(path, what)
     options = {"obs_type": recipe["obs_type"], **recipe["env_options"], **env_options}

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from .._checks import check_bool, number_in, policy_seed, positive_int
-from .._cli import ENV_OPTIONS
+from ..options import ENV_OPTIONS
 
 #: The recipe's settings that the command line exposes as flags (``--num-envs`` …).
 RECIPE_FLAGS = (
@@ -101,7 +101,7 @@ PRESETS["fast"] = {
 PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
 #: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
-#: model's claimed network must also fit the weights it holds before it is built (`model.agent_from_checkpoint`).
+#: model's claimed network must also fit the weights it holds before it is built (`modelfile.agent_from_checkpoint`).
 MAX_MODEL_BYTES = 1 << 30
 
 #: The widest MLP the recipe trains (`hidden`), and the largest step budget (`--steps`; years of CPU).
@@ -162,7 +162,7 @@ class Recipe:
     #: such head. 0 (the default) turns it off. See docs/learning.md ("Pixels").
     aux_coef: float = 0.0
     #: CNN recipes only: the network reads ``1 - frame / 255`` (the white sky as 0, sprites and the gauge
-    #: positive) rather than ``frame / 255``; see :class:`chopperscape.learn.model.Frames` for why. Models of
+    #: positive) rather than ``frame / 255``; see :class:`chopperscape.learn.networks.Frames` for why. Models of
     #: chopperscape 0.1.0 have no such setting and read plain frames.
     invert_frames: bool = True
     #: Pixel recipes only: a features model (from this trainer, on the same rules) that guides the CNN early on

@@ -40,7 +40,8 @@ from pathlib import Path
 from typing import Any
 
 from .. import _atomic
-from .._cli import RULE_OPTIONS, run_command
+from .._cli import run_command
+from ..options import RULE_OPTIONS
 from . import flags
 from .summary import read_curve, read_eval, write_summary
 

@@ -34,37 +34,17 @@ held out); ``--preset pixels-teacher --teacher models/ppo-features-fs4.pt`` is t
 
 from __future__ import annotations
 
-import contextlib
 import json
-import math
-import os
 import sys
-import time
-from collections import deque
-from collections.abc import Iterator
-from dataclasses import asdict
 from pathlib import Path
 
-import numpy as np
-
-from .. import _atomic, _signals
 from .._cli import print_line, run_command
-from ..vector import VectorEnv
 from . import flags, progress
-from .guidance import Guidance, env_state, load_teacher, set_env_state
-from .model import CnnAgent, ObsNormalizer, RunningMeanStd, build_agent, random_shift, save, shift_pad
 from .phases import OFF, Phases
-from .recipe import (
-    LR_FLOOR,
-    MAX_PARAMETERS,
-    MAX_ROLLOUT_BYTES,
-    RUN_FILES,
-    Recipe,
-    check_minutes,
-    check_recipe,
-    check_run_folder,
-    network_of,
-)
+from .ppo import UpdateStats, learning_rate
+from .recipe import Recipe, check_minutes, check_recipe
+from .rollout import Rollout, advantages
+from .run import Run, RunWriteError
 
 try:
     import torch
@@ -74,93 +54,12 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.learn.train needs PyTorch: pip install 'chopperscape[train]' (the CPU build is enough)"
     ) from err
 
+__all__ = ["CSV_COLUMNS", "RunWriteError", "main", "train"]
+
 #: Columns of the progress CSV (the schema and its meaning: :mod:`chopperscape.learn.progress`).
 CSV_COLUMNS = list(progress.COLUMNS)
-
-
-class RunWriteError(OSError):
-    """A file of the run could not be written (a read-only folder, a full disk): the message names it."""
-
-
-@contextlib.contextmanager
-def _writing(path: Path, after: str = "") -> Iterator[None]:
-    """`OSError` in the block as a `RunWriteError` naming `path` (and what is kept, `after`)."""
-    try:
-        yield
-    except RunWriteError:
-        raise
-    except OSError as e:
-        raise RunWriteError(f"cannot write {path}: {e.strerror or e}{after}") from None
-
-
-def _next_aside(out: Path) -> Path:
-    """The first free `OUT/replaced-N` (N = 1, 2, …): where `--force` keeps the run it replaces."""
-    n = 1
-    while os.path.lexists(out / f"replaced-{n}"):
-        n += 1
-    return out / f"replaced-{n}"
-
-
-def start_run(out: Path, recipe: Recipe) -> tuple[progress.Writer, Path | None]:
-    """Makes the run folder `out` ready for a new run and writes its `recipe.json` and the progress header:
-    a run already there (`--force`) is first moved whole into `OUT/replaced-N`, so that `out` never holds files of
-    two runs. Returns the progress writer and where the old run went (None if there was none). On a write
-    error (`RunWriteError`, `ValueError` for an `out` that cannot be a folder), nothing new is left behind and an
-    old run is moved back."""
-    made = not os.path.lexists(out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ValueError(f"--out {out}: cannot make the folder: {e.strerror or e}") from None
-    old = [name for name in RUN_FILES if os.path.lexists(out / name)]
-    aside = _next_aside(out) if old else None
-    moved: list[str] = []
-    try:
-        if aside is not None:
-            with _writing(aside):
-                aside.mkdir()
-                for name in old:
-                    os.replace(out / name, aside / name)
-                    moved.append(name)
-        with _writing(out / "recipe.json"):
-            _atomic.write_text(out / "recipe.json", json.dumps(asdict(recipe), indent=2) + "\n")
-        with _writing(out / "progress.csv"):
-            return progress.Writer(out / "progress.csv"), aside
-    except BaseException:
-        for name in ("progress.csv", "recipe.json"):
-            with contextlib.suppress(OSError):
-                if name not in old or name in moved:
-                    os.unlink(out / name)
-        for name in moved:
-            with contextlib.suppress(OSError):
-                os.replace(aside / name, out / name)  # type: ignore[operator]
-        with contextlib.suppress(OSError):
-            if aside is not None:
-                aside.rmdir()
-            if made:
-                out.rmdir()
-        raise
-
-
-def _read_resume(out: Path) -> dict:
-    """The state `OUT/resume.pt` holds (tensors and plain data, read with `weights_only=True`); `ValueError` naming
-    the file when it is missing or not one this trainer wrote."""
-    from .model import read_checkpoint
-
-    path = out / "resume.pt"
-    what = f"resume state {str(path)!r}"
-    if not os.path.lexists(path):
-        raise ValueError(f"--resume {out}: no resume.pt there (a run saves one at each checkpoint, every 50 updates)")
-    state = read_checkpoint(path, what)
-    if not isinstance(state, dict) or state.get("format") != RESUME_FORMAT:
-        raise ValueError(f"{what} is not a resume state of this trainer (format {RESUME_FORMAT})")
-    return state
-
-
-#: The format of `OUT/resume.pt`.
-RESUME_FORMAT = "chopperscape-ppo-resume/1"
-#: Updates between checkpoints (`model.pt` and `resume.pt`).
-CHECKPOINT_EVERY = 50
+#: How the update's statistics are written in the progress CSV.
+FORMATS = {"entropy": ".4f", "approx_kl": ".5f", "clip_frac": ".4f", "value_loss": ".5f", "policy_loss": ".5f"}
 
 
 def train(
@@ -175,318 +74,105 @@ def train(
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
     model path. `phases` (a :class:`~chopperscape.learn.phases.Phases`) collects where the wall time went.
     With `resume`, continues the run in `out` from its last checkpoint (`resume.pt`): the curve goes on as the
-    uninterrupted run's would (the envs, the statistics, the optimiser and both random streams are restored).
-    `ValueError` for a setting out of range or a folder that holds a run (unless `force` or `resume`), before
-    anything is written; `_signals.Interrupted` after a signal, once the model reached so far is saved."""
-    out = Path(out)
+    uninterrupted run's would. `ValueError` for a setting out of range or a folder that holds a run (unless `force`
+    or `resume`), before anything is written; `_signals.Interrupted` after a signal, once the model reached so far
+    is saved. The run's folder, state and variants are :class:`~.run.Run`'s; this is PPO."""
     check_recipe(recipe)
     check_minutes(minutes)
-    saved = _read_resume(out) if resume else None
-    if not resume:
-        check_run_folder(out, force)
-    teacher = load_teacher(recipe) if recipe.teacher else None
-    torch.manual_seed(recipe.seed)
-    torch.set_num_threads(recipe.torch_threads)
-    rng = np.random.default_rng(recipe.seed)
+    r = recipe
+    with Run(r, Path(out), force=force, resume=resume) as run:
+        s, p = run.state, run.parts
+        agent, optimizer, guide = s.agent, s.optimizer, p.guide
+        params = [q for group in optimizer.param_groups for q in group["params"]]
+        buf = Rollout(r.num_steps, r.num_envs, p.obs_shape, p.obs_dtype, p.device)
 
-    envs = VectorEnv(recipe.num_envs, num_threads=recipe.env_threads, obs_type=recipe.obs_type, **recipe.env_options)
-    obs_shape = tuple(envs.single_observation_space.shape or ())
-    network = network_of(recipe)
-    device = torch.device(recipe.device)
-    size = 0
-    if network != "mlp":  # a CNN's size grows with the frames: measured on the meta device, taking no memory
-        with torch.device("meta"):
-            size = sum(p.numel() for p in build_agent(network, obs_shape, 5, recipe.hidden).parameters())
-    if size > MAX_PARAMETERS:
-        envs.close()
-        raise ValueError(
-            f"the {network} network on observations of shape {obs_shape} would have {size:,} parameters, more than "
-            f"{MAX_PARAMETERS:,}: smaller observations (obs_size), fewer stacked frames or a smaller network"
+        def optimize() -> None:
+            nn.utils.clip_grad_norm_(params, r.max_grad_norm)
+            optimizer.step()
+
+        # What the loop calls, each timed by `phases` (OFF gives them back as they are).
+        act, env_step, encode = (
+            phases.timed(k, f) for k, f in [("forward", agent.act), ("env", run.envs.step), ("obs_norm", p.encode)]
         )
-    agent = build_agent(network, obs_shape, 5, recipe.hidden, recipe.invert_frames).to(device)
-    pixels = network != "mlp"
-    # Training-only guidance from the features (a separate part: plain PPO has none; see guidance.py).
-    guide: Guidance | None = None
-    if recipe.aux_coef > 0 or teacher is not None:
-        if not isinstance(agent, CnnAgent):
-            envs.close()
-            raise ValueError("the auxiliary loss and the teacher are for CNN recipes (pixel observations) only")
-        guide = Guidance(recipe, agent, teacher, recipe.num_steps, device)
-    params = list(agent.parameters()) + (guide.params if guide else [])
-    optimizer = torch.optim.Adam(params, lr=recipe.learning_rate, eps=1e-5)
-    # Vector observations are standardised with running statistics; frames are scaled by the network itself.
-    obs_norm = ObsNormalizer(obs_shape, recipe.norm_obs and not pixels)
-    ret_rms = RunningMeanStd(())
-    disc_return = np.zeros(recipe.num_envs)
-    pad = shift_pad(obs_shape) if recipe.augment == "shift" else 0
-
-    def encode(raw: np.ndarray) -> torch.Tensor:
-        """A batch of observations as the network takes them (frames stay uint8: a quarter of the memory)."""
-        return torch.from_numpy(raw if pixels else obs_norm(raw, update=True)).to(device)
-
-    # --- Rollout storage -------------------------------------------------------------------------------------
-    n, t_len = recipe.num_envs, recipe.num_steps
-    feat_dim = guide.feat_dim if guide else 0
-    # Each stored step: its observation (twice: the buffer and the update's batch), the twin's features, the
-    # teacher's log-probabilities and seven numbers.
-    per_step = 2 * math.prod(obs_shape) * (1 if pixels else 4) + 4 * (2 * feat_dim + 5 + 7)
-    if n * t_len * per_step > MAX_ROLLOUT_BYTES:
-        envs.close()
-        if guide is not None:
-            guide.close()
-        raise ValueError(
-            f"invalid values {n} and {t_len} for options `num_envs` and `num_steps`: an update's rollout would take "
-            f"{n * t_len * per_step / 2**30:.1f} GiB, more than {MAX_ROLLOUT_BYTES >> 30} GiB: fewer envs or steps"
+        gae, heads, backward = (
+            phases.timed(k, f)
+            for k, f in [("gae", advantages), ("update_forward", agent.heads), ("backward", torch.Tensor.backward)]
         )
-    buf_obs = torch.zeros((t_len, n, *obs_shape), dtype=torch.uint8 if pixels else torch.float32, device=device)
-    buf_act = torch.zeros((t_len, n), dtype=torch.long, device=device)
-    buf_logp, buf_rew, buf_done, buf_val = (torch.zeros((t_len, n), device=device) for _ in range(4))
-    # With NEXT_STEP autoreset, the step after an episode's end is the reset step: no transition to learn from.
-    buf_valid = torch.zeros((t_len, n), device=device)
+        optimize, log = phases.timed("optimizer", optimize), phases.timed("logging", run.log)
+        phases.start()
+        while s.env_steps < r.total_steps and not run.stopping(minutes):
+            lr = optimizer.param_groups[0]["lr"] = learning_rate(r, s.env_steps)
 
-    # --- The run's state: what a checkpoint saves and `--resume` restores -------------------------------------
-    next_done = np.zeros(n, bool)  # the previous step ended an episode: this step is a reset step
-    ep_return, ep_len = np.zeros(n), np.zeros(n, np.int64)
-    finished: deque[tuple[float, int]] = deque(maxlen=100)
-    episodes = env_steps = update = 0
-    wall_before = 0.0  # wall seconds of the run before this process (a resumed run's curve keeps counting)
-    if saved is None:
-        raw, _ = envs.reset(seed=recipe.seed)
-        next_obs = encode(raw)
-        if guide is not None:
-            guide.reset(recipe.seed)
-    else:
-        try:
-            agent.load_state_dict(saved["agent"])
-            optimizer.load_state_dict(saved["optimizer"])
-            set_env_state(envs, saved["envs"])
-            if guide is not None:
-                guide.load_state(saved["guidance"])
-            obs_norm.rms = RunningMeanStd.from_state(saved["obs_rms"])
-            ret_rms = RunningMeanStd.from_state(saved["ret_rms"])
-            next_obs = saved["next_obs"].to(device)
-            next_done = saved["next_done"].numpy().astype(bool)
-            disc_return, ep_return = saved["disc_return"].numpy().copy(), saved["ep_return"].numpy().copy()
-            ep_len = saved["ep_len"].numpy().astype(np.int64)
-            finished.extend((float(r), int(k)) for r, k in saved["finished"])
-            episodes, env_steps, update = int(saved["episodes"]), int(saved["env_steps"]), int(saved["update"])
-            wall_before = float(saved["wall_s"])
-            rng.bit_generator.state = json.loads(saved["numpy_rng"])
-            torch.set_rng_state(saved["torch_rng"])
-        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as e:
-            envs.close()
-            if guide is not None:
-                guide.close()
-            raise ValueError(f"--resume {out}: resume.pt does not fit this run's recipe ({e})") from None
-
-    def checkpoint_state() -> dict:
-        return {
-            "format": RESUME_FORMAT,
-            "agent": agent.state_dict(),
-            "optimizer": optimizer.state_dict(),
-            "envs": env_state(envs),
-            "guidance": guide.state() if guide is not None else None,
-            "obs_rms": obs_norm.rms.state(),
-            "ret_rms": ret_rms.state(),
-            "next_obs": next_obs.cpu(),
-            "next_done": torch.from_numpy(next_done.copy()),
-            "disc_return": torch.from_numpy(disc_return.copy()),
-            "ep_return": torch.from_numpy(ep_return.copy()),
-            "ep_len": torch.from_numpy(ep_len.copy()),
-            "finished": [[r, k] for r, k in finished],
-            "episodes": episodes,
-            "env_steps": env_steps,
-            "update": update,
-            "wall_s": wall_before + time.monotonic() - start,
-            "numpy_rng": json.dumps(rng.bit_generator.state),
-            "torch_rng": torch.get_rng_state(),
-        }
-
-    def save_resume(state: dict) -> None:
-        path = out / "resume.pt"
-        with _writing(path, kept), _signals.deferred(f"the resume state is saved in {path}"):
-            with _atomic.replacing(path) as tmp:
-                torch.save(state, tmp)
-
-    start = time.monotonic()
-    model_path = out / "model.pt"
-    csv_path = out / "progress.csv"
-    if resume:
-        writer, aside = progress.Writer.resume(csv_path, env_steps), None
-    else:
-        writer, aside = start_run(out, recipe)
-    if aside is not None:
-        print(f"note: --force: the run that was in {out} is kept in {aside}", file=sys.stderr)
-    kept = "; the model saved last is kept"
-    stop = _signals.defer()  # Ctrl-C ends the run after the current update, which is then saved
-    phases.start()
-    try:
-        while env_steps < recipe.total_steps:
-            if stop.pending is not None:
-                break
-            if minutes is not None and time.monotonic() - start >= minutes * 60:
-                break
-            # The learning rate follows env steps only: the same run on a busy host is the same run.
-            lr = recipe.learning_rate
-            if recipe.anneal_lr:
-                lr *= max(1.0 - env_steps / recipe.total_steps, LR_FLOOR)
-            optimizer.param_groups[0]["lr"] = lr
-
-            # --- Rollout ---------------------------------------------------------------------------------------
-            ends = {"bird": 0, "fuel": 0, "limit": 0}
-            for t in range(t_len):
-                valid = ~next_done
+            # --- Rollout: NEXT_STEP autoreset; the step after an episode's end is a reset step (not valid) ---------
+            s.episodes.new_update()
+            for t in range(r.num_steps):
+                valid = ~s.next_done
                 with torch.no_grad():
-                    action, logp, _, value = agent.act(next_obs)
-                phases.lap("forward")
-                buf_obs[t], buf_act[t], buf_logp[t], buf_val[t] = next_obs, action, logp, value
-                buf_valid[t] = torch.from_numpy(valid.astype(np.float32)).to(device)
+                    action, logp, _, value = act(s.next_obs)
+                buf.store(t, s.next_obs, action, logp, value, valid)
                 actions = action.cpu().numpy()
-                if guide is not None:
-                    guide.store(t)
-                phases.lap("bookkeeping")
-                raw, reward, term, trunc, info = envs.step(actions)
-                phases.lap("env")
-                if guide is not None:
-                    guide.step(actions, reward, term, trunc)
-                env_steps += int(valid.sum())
+                guide.store(t)
+                raw, reward, term, trunc, info = env_step(actions)
+                guide.step(actions, reward, term, trunc)
+                s.env_steps += int(valid.sum())
+                s.episodes.record(reward, valid, term, trunc, info)
                 done = term | trunc
-                # Episode statistics, on real (not reset) steps.
-                ep_return += np.where(valid, reward, 0)
-                ep_len += valid
-                for i in np.flatnonzero(done):
-                    finished.append((float(ep_return[i]), int(ep_len[i])))
-                    episodes += 1
-                    ends[str(info["cause"][i]) if term[i] else "limit"] += 1
-                ep_return[done], ep_len[done] = 0, 0
-                # Reward scaling by the std of the discounted return (Gymnasium's NormalizeReward).
-                r = reward.astype(np.float64)
-                if recipe.norm_reward:
-                    disc_return = np.where(valid, disc_return * recipe.gamma + r, 0.0)
-                    if valid.any():
-                        ret_rms.update(disc_return[valid])
-                    r = r / math.sqrt(ret_rms.var + 1e-8)
-                    disc_return[done] = 0.0
-                buf_rew[t] = torch.from_numpy(np.where(valid, r, 0.0).astype(np.float32)).to(device)
-                # Truncation is treated as termination (10,000 steps is ten horizons of γ = 0.999).
-                buf_done[t] = torch.from_numpy(done.astype(np.float32)).to(device)
-                next_done = done
-                phases.lap("bookkeeping")
-                next_obs = encode(raw)
-                phases.lap("obs_norm")
+                buf.outcome(t, s.rewards(reward, valid, done), done)
+                s.next_done = done
+                s.next_obs = encode(raw)
 
-            # --- Advantages: GAE over valid steps; a reset step neither bootstraps nor is learned from ------------
-            with torch.no_grad():
-                next_value = agent.value(next_obs)
-                adv = torch.zeros((t_len, n), device=device)
-                last = torch.zeros(n, device=device)
-                for t in reversed(range(t_len)):
-                    nv = next_value if t == t_len - 1 else buf_val[t + 1]
-                    nonterminal = 1.0 - buf_done[t]
-                    delta = buf_rew[t] + recipe.gamma * nv * nonterminal - buf_val[t]
-                    last = delta + recipe.gamma * recipe.gae_lambda * nonterminal * last
-                    # The row after an episode's end is its reset step: it carries nothing across.
-                    last = last * buf_valid[t]
-                    adv[t] = last
-                returns = adv + buf_val
-            mask = buf_valid.reshape(-1).bool()
-            b_obs = buf_obs.reshape(-1, *obs_shape)[mask]
-            b_act, b_logp = buf_act.reshape(-1)[mask], buf_logp.reshape(-1)[mask]
-            b_adv, b_ret = adv.reshape(-1)[mask], returns.reshape(-1)[mask]
-            b_val = buf_val.reshape(-1)[mask]
-            if guide is not None:
-                guide.flatten(mask)
-            size = b_obs.shape[0]
-            phases.lap("gae")
+            # --- Advantages: GAE over the valid steps -----------------------------------------------------------
+            batch = gae(buf, agent, s.next_obs, r.gamma, r.gae_lambda)
+            guide.flatten(batch.mask)
 
-            # --- Optimisation ------------------------------------------------------------------------------------
-            # entropy, approx_kl, clip_frac, value_loss, policy_loss, minibatches, aux_loss, teacher_kl
-            stats = np.zeros(8)
-            for _ in range(recipe.update_epochs):
-                # Even minibatches (no tiny remainder, whose advantage std would be undefined).
-                for idx in torch.from_numpy(rng.permutation(size)).to(device).tensor_split(recipe.num_minibatches):
-                    mb_obs = random_shift(b_obs[idx], pad) if pad else b_obs[idx]
-                    logits, value, h = agent.heads(mb_obs)
+            # --- Optimisation ---------------------------------------------------------------------------------
+            stats = UpdateStats()
+            for _ in range(r.update_epochs):
+                for idx in batch.minibatches(s.rng, r.num_minibatches):
+                    logits, value, h = heads(p.augment(batch.obs[idx]))
                     dist = torch.distributions.Categorical(logits=logits)
-                    logp, entropy = dist.log_prob(b_act[idx]), dist.entropy()
-                    log_ratio = logp - b_logp[idx]
+                    logp, entropy = dist.log_prob(batch.actions[idx]), dist.entropy()
+                    log_ratio = logp - batch.logp[idx]
                     ratio = log_ratio.exp()
-                    a = b_adv[idx]
+                    a = batch.advantages[idx]
                     a = (a - a.mean()) / (a.std() + 1e-8)
-                    pg = torch.max(-a * ratio, -a * ratio.clamp(1 - recipe.clip_coef, 1 + recipe.clip_coef)).mean()
-                    v_loss = 0.5 * ((value - b_ret[idx]) ** 2).mean()
+                    pg = torch.max(-a * ratio, -a * ratio.clamp(1 - r.clip_coef, 1 + r.clip_coef)).mean()
+                    v_loss = 0.5 * ((value - batch.returns[idx]) ** 2).mean()
                     ent = entropy.mean()
-                    loss = pg - recipe.ent_coef * ent + recipe.vf_coef * v_loss
-                    aux_loss = teacher_kl = 0.0
-                    if guide is not None:
-                        extra, aux_loss, teacher_kl = guide.loss(idx, logits, h, env_steps)
-                        loss = loss + extra
+                    extra, guided = guide.loss(idx, logits, h, s.env_steps)
+                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra
                     if not torch.isfinite(loss):
-                        raise FloatingPointError(f"loss became {loss.item()} at update {update}")
+                        raise FloatingPointError(f"loss became {loss.item()} at update {s.update}")
                     optimizer.zero_grad()
-                    loss.backward()
-                    nn.utils.clip_grad_norm_(params, recipe.max_grad_norm)
-                    optimizer.step()
-                    with torch.no_grad():
-                        # Schulman's low-variance KL estimator, as CleanRL logs it.
+                    backward(loss)
+                    optimize()
+                    with torch.no_grad():  # Schulman's low-variance KL estimator, as CleanRL logs it
                         kl = ((ratio - 1) - log_ratio).mean()
-                        clipped = ((ratio - 1).abs() > recipe.clip_coef).float().mean()
-                    stats += [ent.item(), kl.item(), clipped.item(), v_loss.item(), pg.item(), 1, aux_loss, teacher_kl]
-            update += 1
-            phases.lap("update")
-            var_ret = b_ret.var().item()
-            explained = float("nan") if var_ret == 0 else 1 - (b_ret - b_val).var().item() / var_ret
+                        clipped = ((ratio - 1).abs() > r.clip_coef).float().mean()
+                    stats.add(
+                        {
+                            "entropy": ent.item(),
+                            "approx_kl": kl.item(),
+                            "clip_frac": clipped.item(),
+                            "value_loss": v_loss.item(),
+                            "policy_loss": pg.item(),
+                            **guided,
+                        }
+                    )
+            s.update += 1
 
-            # --- Logging -----------------------------------------------------------------------------------------
-            # One row per update; the return columns stay empty until the first episode has ended.
-            rets = np.array([r for r, _ in finished])
-            lens = np.array([n for _, n in finished])
-            ended = sum(ends.values())
-            m = stats / max(stats[5], 1)
-            row = {
-                "env_steps": env_steps,
-                "wall_s": f"{wall_before + time.monotonic() - start:.1f}",
-                "episodes": episodes,
-                "learning_rate": f"{lr:.6g}",
-                "entropy": f"{m[0]:.4f}",
-                "approx_kl": f"{m[1]:.5f}",
-                "clip_frac": f"{m[2]:.4f}",
-                "explained_var": f"{explained:.4f}",
-                "value_loss": f"{m[3]:.5f}",
-                "policy_loss": f"{m[4]:.5f}",
-                "ended": ended,
-            }
-            if finished:
-                row.update(
-                    mean_return=f"{rets.mean():.1f}", std_return=f"{rets.std():.1f}", mean_length=f"{lens.mean():.1f}"
-                )
-            if ended:
-                row.update({k: f"{ends[k] / ended:.3f}" for k in ("bird", "fuel", "limit")})
-            if guide is not None and guide.aux_head is not None:
-                row["aux_loss"] = f"{m[6]:.5f}"
-            if guide is not None and guide.teacher is not None:
-                row["teacher_kl"] = f"{m[7]:.5f}"
-            with _writing(csv_path, kept):
-                writer.row(row)
-            if update % CHECKPOINT_EVERY == 0:
-                with _writing(model_path, kept):
-                    save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
-                save_resume(checkpoint_state())
-            phases.lap("logging")
-            phases.steps = env_steps
-        # The end, a signal or --minutes: the model and the state to go on from, both as they are now.
-        with _writing(model_path, kept):
-            save(model_path, agent, obs_norm, recipe, obs_shape, env_steps)
-        save_resume(checkpoint_state())
-    finally:
-        with contextlib.suppress(OSError):
-            writer.close()
-        envs.close()
-        if guide is not None:
-            guide.close()
-        stop.restore()
-    stop.check(f"the model reached so far ({env_steps} env steps) is saved in {model_path}")
-    return model_path
+            # --- Logging: one row per update, a checkpoint every `run.CHECKPOINT_EVERY` -------------------------
+            log(
+                {
+                    "env_steps": s.env_steps,
+                    "learning_rate": f"{lr:.6g}",
+                    "explained_var": f"{batch.explained_variance():.4f}",
+                    **s.episodes.columns(),
+                    **stats.columns(FORMATS),
+                }
+            )
+        phases.finish(s.env_steps)
+    return run.model_path
 
 
 def main(argv: list[str] | None = None) -> int:

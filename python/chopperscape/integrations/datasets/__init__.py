@@ -47,6 +47,7 @@ from typing import Any, Callable
 from ... import _cli, _core, policies
 from ..._checks import positive_int, time_limit
 from ...env import make_env
+from ...options import OBSERVATION_OPTIONS
 from .place import minari_modules
 from .writer import write
 
@@ -153,11 +154,10 @@ def from_action_logs(
     paths = [pathlib.Path(p) for p in logs]
     if not paths:
         raise ValueError("no action logs given: from_action_logs needs at least one")
-    bad = sorted(set(obs_options) - set(_cli.OBSERVATION_OPTIONS))
+    bad = sorted(set(obs_options) - set(OBSERVATION_OPTIONS))
     if bad:
-        raise ValueError(
-            f"options {bad} change the rules, which come from the logs: allowed {', '.join(_cli.OBSERVATION_OPTIONS)}"
-        )
+        allowed = ", ".join(OBSERVATION_OPTIONS)
+        raise ValueError(f"options {bad} change the rules, which come from the logs: allowed {allowed}")
     read = [read_action_log(p) for p in paths]
     rules, limit = read[0]["options"], read[0]["max_episode_steps"]
     for p, log in zip(paths, read):

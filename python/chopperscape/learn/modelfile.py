@@ -1,9 +1,10 @@
-"""The recipe's model and its file: the networks (an MLP on features, CNNs on frames), the observation normaliser,
-and the checkpoint format ``chopperscape-ppo/1`` that :mod:`.train` writes and :mod:`.evaluate` and :mod:`.export`
-read.
+"""The recipe's model file, format ``chopperscape-ppo/1``: what :mod:`.train` saves (:func:`save`) and
+:mod:`.evaluate`, :mod:`.export` and the teacher read (:func:`load`). The policy's networks, its frozen observation
+statistics and the recipe it was trained with.
 
 The file holds tensors and plain data only, so it is read with ``torch.load(weights_only=True)``: a crafted file
-cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it field by field.
+cannot run code (:func:`read_checkpoint`). :func:`load` reads one and checks it field by field, the network's
+claimed sizes against the weights before anything is built.
 """
 
 from __future__ import annotations
@@ -15,240 +16,26 @@ import warnings
 import zipfile
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any, NamedTuple, TypeVar, cast
+from typing import Any, NamedTuple
 
 import numpy as np
-from gymnasium.wrappers.utils import RunningMeanStd as _GymRunningMeanStd
 
 try:
     import torch
-    from torch import nn
 except ImportError as err:  # pragma: no cover - exercised only without torch
     raise ImportError(
         "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
     ) from err
 
-from .. import FEATURES_VERSION, PIXELS_VERSION, _atomic, _core, _signals
+from .. import FEATURES_VERSION, NUM_ACTIONS, PIXELS_VERSION, _atomic, _core, _signals
 from .._checks import regular_file
-from .._cli import ENV_OPTIONS
-from .recipe import MAX_MODEL_BYTES, NETWORKS, RESERVED_OPTIONS, Recipe, network_of
+from ..options import ENV_OPTIONS
+from .networks import ActorCritic, build_agent
+from .normalize import ObsNormalizer, RunningMeanStd
+from .recipe import MAX_MODEL_BYTES, RESERVED_OPTIONS, Recipe, network_of
 
 #: The checkpoint format this module writes and reads.
 FORMAT = "chopperscape-ppo/1"
-
-
-class RunningMeanStd(_GymRunningMeanStd):
-    """Gymnasium's running mean and variance (Chan et al.'s parallel update, the one its and SB3's normalisers keep),
-    with its state as plain data for checkpoints."""
-
-    def __init__(self, shape: tuple[int, ...] = ()):
-        super().__init__(shape=shape)
-
-    def state(self) -> dict[str, Any]:
-        return {"mean": self.mean.tolist(), "var": self.var.tolist(), "count": float(self.count)}
-
-    @classmethod
-    def from_state(cls, s: dict[str, Any]) -> RunningMeanStd:
-        r = cls()
-        r.mean, r.var, r.count = np.asarray(s["mean"]), np.asarray(s["var"]), float(s["count"])
-        return r
-
-
-class ObsNormalizer:
-    """Standardises observations with running statistics, clipped to ±10 (frozen at evaluation)."""
-
-    def __init__(self, shape: tuple[int, ...], enabled: bool = True):
-        self.rms = RunningMeanStd(shape)
-        self.enabled = enabled
-
-    def __call__(self, obs: np.ndarray, update: bool = False) -> np.ndarray:
-        obs = obs.astype(np.float32, copy=False)
-        if not self.enabled:
-            return obs
-        if update:
-            self.rms.update(obs)
-        out = (obs - self.rms.mean) / np.sqrt(self.rms.var + 1e-8)
-        return np.clip(out, -10.0, 10.0).astype(np.float32)
-
-
-#: A layer that `_layer` initialises.
-_L = TypeVar("_L", nn.Linear, nn.Conv2d)
-
-
-def _layer(layer: _L, std: float = math.sqrt(2)) -> _L:
-    """Orthogonal weights and zero biases, as in CleanRL's PPO."""
-    nn.init.orthogonal_(layer.weight, std)
-    if layer.bias is not None:
-        nn.init.constant_(layer.bias, 0.0)
-    return layer
-
-
-class ActorCritic(nn.Module):
-    """What PPO needs of a network: `actor(obs)` gives the action logits and `critic(obs)` the value."""
-
-    actor: nn.Module
-    critic: nn.Module
-
-    def value(self, x: torch.Tensor) -> torch.Tensor:
-        return self.critic(x).squeeze(-1)
-
-    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        """`(logits, value, embedding)`: the embedding is what both heads read where they share a trunk (a CNN's),
-        for auxiliary losses on it; None for separate networks."""
-        return self.actor(x), self.value(x), None
-
-    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
-        """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
-        logits, value, _ = self.heads(x)
-        dist = torch.distributions.Categorical(logits=logits)
-        if action is None:
-            action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), value
-
-
-class Agent(ActorCritic):
-    """Separate actor and critic MLPs (tanh), orthogonal init as in CleanRL's PPO."""
-
-    def __init__(self, obs_dim: int, num_actions: int, hidden: int):
-        super().__init__()
-        self.critic = nn.Sequential(
-            _layer(nn.Linear(obs_dim, hidden)),
-            nn.Tanh(),
-            _layer(nn.Linear(hidden, hidden)),
-            nn.Tanh(),
-            _layer(nn.Linear(hidden, 1), 1.0),
-        )
-        self.actor = nn.Sequential(
-            _layer(nn.Linear(obs_dim, hidden)),
-            nn.Tanh(),
-            _layer(nn.Linear(hidden, hidden)),
-            nn.Tanh(),
-            _layer(nn.Linear(hidden, num_actions), 0.01),
-        )
-
-
-class Frames(nn.Module):
-    """The env's grayscale observation as the convolutions want it: ``(N, H, W)`` or ``(N, H, W, k)`` (k stacked
-    frames, uint8 or float in 0..255) to ``(N, k, H, W)`` floats in [0, 1]. Part of the network, so that a
-    saved or exported policy takes the env's observation unchanged.
-
-    With `invert`, the floats are ``1 - x / 255``: ChopperScape's sky is white, so plain scaling gives every input
-    a large constant (1.0 nearly everywhere) on which the sprites are small dips. Through ReLU convolutions that
-    constant dominates the trunk's output (measured at initialisation on random play: the embedding varies by 7 %
-    of its mean across frames, and 38 % of its units never fire) and PPO's policy settles on one action. Inverted,
-    the sky is 0 and the sprites and the gauge are positive, as on Atari's dark screens (ratio 44 %, 6 % dead).
-    Models of chopperscape 0.1.0 read plain frames (`Recipe.invert_frames` is False for them)."""
-
-    def __init__(self, invert: bool = False):
-        super().__init__()
-        self.invert = invert
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        # Permuted first, cast after: the floats come out channels-last in memory, which the CPU convolutions
-        # read faster than a strided view of NHWC floats (and the same numbers).
-        x = x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
-        if self.invert:
-            return 1.0 - x.float() * (1.0 / 255.0)
-        return x.float() * (1.0 / 255.0)
-
-
-def shift_pad(obs_shape: tuple[int, ...]) -> int:
-    """The random shift's padding for frames of `obs_shape`: 4 pixels at 84 × 84 (DrQ's), scaled, at least 1."""
-    return max(1, round(4 * min(obs_shape[:2]) / 84))
-
-
-def random_shift(x: torch.Tensor, pad: int, generator: torch.Generator | None = None) -> torch.Tensor:
-    """DrQ's random shift of a batch of frame stacks `x` (``(N, H, W)`` or ``(N, H, W, k)``, any dtype): each
-    padded by `pad` pixels that repeat its edges, then cropped back to ``H × W`` at its own random offset in
-    ``0..=2·pad`` (integer shifts, one per frame stack, the same for its `k` frames)."""
-    squeeze = x.dim() == 3
-    if squeeze:
-        x = x.unsqueeze(-1)
-    n, h, w, _ = x.shape
-    off = torch.randint(0, 2 * pad + 1, (2, n), device=x.device, generator=generator)
-    # Edge padding as clamped indices: row r of the padded frame is row clamp(r - pad) of the frame.
-    r = (torch.arange(h, device=x.device)[None, :] + off[0][:, None] - pad).clamp_(0, h - 1)
-    c = (torch.arange(w, device=x.device)[None, :] + off[1][:, None] - pad).clamp_(0, w - 1)
-    out = x[torch.arange(n, device=x.device)[:, None, None], r[:, :, None], c[:, None, :]]
-    return out.squeeze(-1) if squeeze else out
-
-
-#: CNN layouts: (channels, kernel, stride) per convolution, then the width of the dense layer. "small" on frames
-#: under 64 pixels starts with a 4×4 stride-2 convolution, so that its second one sees the same 9×9 map at 42×42
-#: as at 84×84.
-CNNS = {
-    "nature": ([(32, 8, 4), (64, 4, 2), (64, 3, 1)], 512),
-    "small": ([(16, 8, 4), (32, 4, 2)], 256),
-    "small-42": ([(16, 4, 2), (32, 4, 2)], 256),
-}
-
-
-class CnnAgent(ActorCritic):
-    """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy), or,
-    for a "-split" network, each on a trunk of its own (the layout of PPG's separate value network, Cobbe et al.
-    2021: the value loss no longer shapes the policy's features). `actor(obs)` gives the logits and `critic(obs)`
-    the value, as for :class:`Agent`."""
-
-    def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
-        super().__init__()
-        self.split = network.endswith("-split")
-        network = network.removesuffix("-split")
-        h, w = obs_shape[:2]
-        stack = obs_shape[2] if len(obs_shape) == 3 else 1
-        name = "small-42" if network == "small" and min(h, w) < 64 else network
-        convs, width = CNNS[name]
-        size = [h, w]
-        for _, kernel, stride in convs:
-            size = [(d - kernel) // stride + 1 for d in size]
-            if min(size) < 1:
-                raise ValueError(
-                    f"frames of {h}×{w} are too small for the {network!r} network (at least 36×36 for 'nature', "
-                    "16×16 for 'small')"
-                )
-        flat = convs[-1][0] * size[0] * size[1]
-
-        def make_trunk() -> nn.Sequential:
-            layers: list[nn.Module] = [Frames(invert_frames)]
-            channels = stack
-            for out, kernel, stride in convs:
-                layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
-                channels = out
-            return nn.Sequential(*layers, nn.Flatten(), _layer(nn.Linear(flat, width)), nn.ReLU())
-
-        trunk = make_trunk()
-        # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.
-        self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
-        critic_trunk = make_trunk() if self.split else trunk  # a trunk of its own: its own initial weights
-        self.critic = nn.Sequential(critic_trunk, _layer(nn.Linear(width, 1), 1.0))
-
-    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        """`(logits, value, embedding)` from one pass of each trunk: with a shared trunk `actor(x)` and `critic(x)`
-        would each run it (twice the convolutions, forward and backward, for the same numbers), so
-        :meth:`ActorCritic.act` runs it once. The embedding is the actor's."""
-        actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
-        h = actor[0](x)
-        value = critic[1](critic[0](x) if self.split else h)
-        return actor[1](h), value.squeeze(-1), h
-
-    @property
-    def embedding_width(self) -> int:
-        return int(cast(nn.Linear, cast(nn.Sequential, self.actor)[1]).in_features)
-
-
-def build_agent(
-    network: str, obs_shape: tuple[int, ...], num_actions: int = 5, hidden: int = 128, invert_frames: bool = False
-) -> ActorCritic:
-    """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's); a CNN reads
-    inverted frames with `invert_frames` (see :class:`Frames`)."""
-    if network == "mlp":
-        if len(obs_shape) != 1:
-            raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
-        return Agent(int(obs_shape[0]), num_actions, hidden)
-    if network not in NETWORKS or network == "auto":
-        raise ValueError(f"invalid network {network!r}: allowed {', '.join(map(repr, NETWORKS))}")
-    if len(obs_shape) not in (2, 3):
-        raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
-    return CnnAgent(tuple(obs_shape), num_actions, network, invert_frames)
 
 
 def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCritic:
@@ -268,8 +55,8 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
     for field, value in (("obs_dim", obs_dim), ("recipe.hidden", hidden), ("num_actions", payload.get("num_actions"))):
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 1 << 24:
             raise bad(field, "must be a positive integer")
-    if payload["num_actions"] != 5 or not isinstance(recipe.get("obs_type"), str):
-        raise bad("num_actions/recipe.obs_type", "must be 5 actions and an observation type")
+    if payload["num_actions"] != NUM_ACTIONS or not isinstance(recipe.get("obs_type"), str):
+        raise bad("num_actions/recipe.obs_type", f"must be {NUM_ACTIONS} actions and an observation type")
     shape = payload.get("obs_shape", [obs_dim])
     if (
         not isinstance(shape, list)
@@ -301,7 +88,7 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
     # weights in the file before the real one is built, so a small file cannot claim a network of gigabytes.
     try:
         with torch.device("meta"):
-            shaped = build_agent(network, tuple(shape), 5, int(hidden or 0), invert)
+            shaped = build_agent(network, tuple(shape), NUM_ACTIONS, int(hidden or 0), invert)
     except ValueError as e:
         raise bad("recipe.network", str(e)) from None
     for part in ("actor", "critic"):
@@ -317,7 +104,7 @@ def agent_from_checkpoint(payload: Any, what: str = "the checkpoint") -> ActorCr
                 f"`{k}` is {list(have[k]) if k in have else 'missing'} where the network has "
                 f"{list(want[k]) if k in want else 'no such weight'}",
             )
-    agent = build_agent(network, tuple(shape), 5, int(hidden or 0), invert)
+    agent = build_agent(network, tuple(shape), NUM_ACTIONS, int(hidden or 0), invert)
     for part in ("actor", "critic"):
         state = payload[part]
         try:
@@ -376,7 +163,7 @@ def save(
         "recipe": _plain(asdict(recipe)),
         "obs_shape": list(obs_shape),
         "obs_dim": int(np.prod(obs_shape)),
-        "num_actions": 5,
+        "num_actions": NUM_ACTIONS,
         "obs_rms": obs_norm.rms.state() if obs_norm.enabled else None,
         "env_steps": int(env_steps),
         # The observation layouts the policy learned: a later layout is a different input.

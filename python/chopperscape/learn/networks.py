@@ -1,0 +1,188 @@
+"""The recipe's networks: an MLP actor and critic on features (:class:`Agent`), CNNs on frames with one trunk or two
+(:class:`CnnAgent`), and :func:`build_agent`, which makes the one a recipe names. Orthogonal initialisation as in
+CleanRL's PPO. Nothing here reads or writes files (:mod:`.modelfile` does) or knows of training."""
+
+from __future__ import annotations
+
+import math
+from typing import TypeVar, cast
+
+try:
+    import torch
+    from torch import nn
+except ImportError as err:  # pragma: no cover - exercised only without torch
+    raise ImportError(
+        "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
+    ) from err
+
+from .. import NUM_ACTIONS
+from .recipe import NETWORKS
+
+#: A layer that `_layer` initialises.
+_L = TypeVar("_L", nn.Linear, nn.Conv2d)
+
+
+def _layer(layer: _L, std: float = math.sqrt(2)) -> _L:
+    """Orthogonal weights and zero biases, as in CleanRL's PPO."""
+    nn.init.orthogonal_(layer.weight, std)
+    if layer.bias is not None:
+        nn.init.constant_(layer.bias, 0.0)
+    return layer
+
+
+class ActorCritic(nn.Module):
+    """What PPO needs of a network: `actor(obs)` gives the action logits and `critic(obs)` the value."""
+
+    actor: nn.Module
+    critic: nn.Module
+
+    def value(self, x: torch.Tensor) -> torch.Tensor:
+        return self.critic(x).squeeze(-1)
+
+    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """`(logits, value, embedding)`: the embedding is what both heads read where they share a trunk (a CNN's),
+        for auxiliary losses on it; None for separate networks."""
+        return self.actor(x), self.value(x), None
+
+    def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
+        """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
+        logits, value, _ = self.heads(x)
+        dist = torch.distributions.Categorical(logits=logits)
+        if action is None:
+            action = dist.sample()
+        return action, dist.log_prob(action), dist.entropy(), value
+
+
+class Agent(ActorCritic):
+    """Separate actor and critic MLPs (tanh), orthogonal init as in CleanRL's PPO."""
+
+    def __init__(self, obs_dim: int, num_actions: int, hidden: int):
+        super().__init__()
+        self.critic = nn.Sequential(
+            _layer(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, 1), 1.0),
+        )
+        self.actor = nn.Sequential(
+            _layer(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
+            _layer(nn.Linear(hidden, num_actions), 0.01),
+        )
+
+
+class Frames(nn.Module):
+    """The env's grayscale observation as the convolutions want it: ``(N, H, W)`` or ``(N, H, W, k)`` (k stacked
+    frames, uint8 or float in 0..255) to ``(N, k, H, W)`` floats in [0, 1]. Part of the network, so that a
+    saved or exported policy takes the env's observation unchanged.
+
+    With `invert`, the floats are ``1 - x / 255``: ChopperScape's sky is white, so plain scaling gives every input
+    a large constant (1.0 nearly everywhere) on which the sprites are small dips. Through ReLU convolutions that
+    constant dominates the trunk's output (measured at initialisation on random play: the embedding varies by 7 %
+    of its mean across frames, and 38 % of its units never fire) and PPO's policy settles on one action. Inverted,
+    the sky is 0 and the sprites and the gauge are positive, as on Atari's dark screens (ratio 44 %, 6 % dead).
+    Models of chopperscape 0.1.0 read plain frames (`Recipe.invert_frames` is False for them)."""
+
+    def __init__(self, invert: bool = False):
+        super().__init__()
+        self.invert = invert
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        # Permuted first, cast after: the floats come out channels-last in memory, which the CPU convolutions
+        # read faster than a strided view of NHWC floats (and the same numbers).
+        x = x.unsqueeze(1) if x.dim() == 3 else x.permute(0, 3, 1, 2)
+        if self.invert:
+            return 1.0 - x.float() * (1.0 / 255.0)
+        return x.float() * (1.0 / 255.0)
+
+
+#: CNN layouts: (channels, kernel, stride) per convolution, then the width of the dense layer. "small" on frames
+#: under 64 pixels starts with a 4×4 stride-2 convolution, so that its second one sees the same 9×9 map at 42×42
+#: as at 84×84.
+CNNS = {
+    "nature": ([(32, 8, 4), (64, 4, 2), (64, 3, 1)], 512),
+    "small": ([(16, 8, 4), (32, 4, 2)], 256),
+    "small-42": ([(16, 4, 2), (32, 4, 2)], 256),
+}
+
+
+class CnnAgent(ActorCritic):
+    """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy), or,
+    for a "-split" network, each on a trunk of its own (the layout of PPG's separate value network, Cobbe et al.
+    2021: the value loss no longer shapes the policy's features). `actor(obs)` gives the logits and `critic(obs)`
+    the value, as for :class:`Agent`."""
+
+    def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
+        super().__init__()
+        self.split = network.endswith("-split")
+        network = network.removesuffix("-split")
+        h, w = obs_shape[:2]
+        stack = obs_shape[2] if len(obs_shape) == 3 else 1
+        name = "small-42" if network == "small" and min(h, w) < 64 else network
+        convs, width = CNNS[name]
+        size = [h, w]
+        for _, kernel, stride in convs:
+            size = [(d - kernel) // stride + 1 for d in size]
+            if min(size) < 1:
+                raise ValueError(
+                    f"frames of {h}×{w} are too small for the {network!r} network (at least 36×36 for 'nature', "
+                    "16×16 for 'small')"
+                )
+        flat = convs[-1][0] * size[0] * size[1]
+
+        def make_trunk() -> nn.Sequential:
+            layers: list[nn.Module] = [Frames(invert_frames)]
+            channels = stack
+            for out, kernel, stride in convs:
+                layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
+                channels = out
+            return nn.Sequential(*layers, nn.Flatten(), _layer(nn.Linear(flat, width)), nn.ReLU())
+
+        trunk = make_trunk()
+        # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.
+        self.actor = nn.Sequential(trunk, _layer(nn.Linear(width, num_actions), 0.01))
+        critic_trunk = make_trunk() if self.split else trunk  # a trunk of its own: its own initial weights
+        self.critic = nn.Sequential(critic_trunk, _layer(nn.Linear(width, 1), 1.0))
+
+    def heads(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        """`(logits, value, embedding)` from one pass of each trunk: with a shared trunk `actor(x)` and `critic(x)`
+        would each run it (twice the convolutions, forward and backward, for the same numbers), so
+        :meth:`ActorCritic.act` runs it once. The embedding is the actor's."""
+        actor, critic = cast(nn.Sequential, self.actor), cast(nn.Sequential, self.critic)
+        h = actor[0](x)
+        value = critic[1](critic[0](x) if self.split else h)
+        return actor[1](h), value.squeeze(-1), h
+
+    @property
+    def embedding_width(self) -> int:
+        return int(cast(nn.Linear, cast(nn.Sequential, self.actor)[1]).in_features)
+
+
+def build_agent(
+    network: str,
+    obs_shape: tuple[int, ...],
+    num_actions: int = NUM_ACTIONS,
+    hidden: int = 128,
+    invert_frames: bool = False,
+) -> ActorCritic:
+    """The agent for `network` ("mlp", "small" or "nature") on observations of `obs_shape` (one env's); a CNN reads
+    inverted frames with `invert_frames` (see :class:`Frames`)."""
+    if network == "mlp":
+        if len(obs_shape) != 1:
+            raise ValueError(f"the mlp network takes vector observations (obs_type='features'), not shape {obs_shape}")
+        return Agent(int(obs_shape[0]), num_actions, hidden)
+    if network not in NETWORKS or network == "auto":
+        raise ValueError(f"invalid network {network!r}: allowed {', '.join(map(repr, NETWORKS))}")
+    if len(obs_shape) not in (2, 3):
+        raise ValueError(f"the {network!r} CNN takes grayscale frames (obs_type='grayscale'), not shape {obs_shape}")
+    return CnnAgent(tuple(obs_shape), num_actions, network, invert_frames)
+
+
+def parameter_count(network: str, obs_shape: tuple[int, ...], hidden: int) -> int:
+    """How many parameters the agent `network` on observations of `obs_shape` has, counted on the meta device (the
+    shapes only, no memory): a CNN's size grows with its frames, so it is known before anything is allocated."""
+    with torch.device("meta"):
+        return sum(p.numel() for p in build_agent(network, obs_shape, NUM_ACTIONS, hidden).parameters())
