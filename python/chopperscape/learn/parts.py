@@ -8,7 +8,7 @@ runs. Plain PPO's guidance is :class:`Unguided`, which does nothing; the feature
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import torch
@@ -16,7 +16,7 @@ import torch
 from .. import NUM_ACTIONS
 from ..vector import VectorEnv
 from .augment import augmentation
-from .networks import ActorCritic, build_agent, parameter_count
+from .networks import ActorCritic, CnnAgent, build_agent, parameter_count
 from .normalize import ObsNormalizer
 from .recipe import MAX_PARAMETERS, MAX_ROLLOUT_BYTES, Recipe, network_of
 from .rollout import Rollout
@@ -94,7 +94,7 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
     if recipe.aux_coef > 0 or teacher is not None:
         from .guidance import Guidance
 
-        guide = Guidance(recipe, agent, teacher, recipe.num_steps, device)
+        guide = Guidance(recipe, cast(CnnAgent, agent), teacher, recipe.num_steps, device)
     # Beside each step, guidance stores the twin's features (twice, with the batch) and the teacher's log-probabilities.
     n, t_len = recipe.num_envs, recipe.num_steps
     per_step = Rollout.bytes_per_step(obs_shape, pixels, 2 * guide.feat_dim + NUM_ACTIONS)

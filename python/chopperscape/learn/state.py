@@ -96,7 +96,7 @@ class Clock:
 class TrainState:
     """A run between two updates: what a checkpoint saves and `--resume` restores, each field by itself."""
 
-    agent: torch.nn.Module
+    agent: Any  # networks.ActorCritic
     optimizer: torch.optim.Optimizer
     obs_norm: Any  # normalize.ObsNormalizer
     rewards: Any  # normalize.RewardScaler

@@ -91,13 +91,12 @@ def train(
             optimizer.step()
 
         # What the loop calls, each timed by `phases` (OFF gives them back as they are).
-        act, env_step, encode = (
-            phases.timed(k, f) for k, f in [("forward", agent.act), ("env", run.envs.step), ("obs_norm", p.encode)]
-        )
-        gae, heads, backward = (
-            phases.timed(k, f)
-            for k, f in [("gae", advantages), ("update_forward", agent.heads), ("backward", torch.Tensor.backward)]
-        )
+        act = phases.timed("forward", agent.act)
+        env_step = phases.timed("env", run.envs.step)
+        encode = phases.timed("obs_norm", p.encode)
+        gae = phases.timed("gae", advantages)
+        heads = phases.timed("update_forward", agent.heads)
+        backward = phases.timed("backward", torch.Tensor.backward)
         optimize, log = phases.timed("optimizer", optimize), phases.timed("logging", run.log)
         phases.start()
         while s.env_steps < r.total_steps and not run.stopping(minutes):
