@@ -144,7 +144,7 @@ SITE_PAGES = {
     "docs/rllib.md": "rllib.md",
     "docs/SPEC.md": "rules.md",
     "docs/notes/README.md": "notes.md",
-    **{note: "notes.md" for note in NOTES},
+    **dict.fromkeys(NOTES, "notes.md"),
 }
 LINK = re.compile(r"(!?)\[([^\]]*)\]\(([^)\s]+)\)")
 
