@@ -4,7 +4,7 @@
 
 For each setting it collects one rollout (8 envs × 2048 steps, SB3's defaults, `obs_type="features"`), then takes a
 minibatch of 64 and prints the gradient norms of the policy loss and of the value loss, and the factor by which
-`max_grad_norm = 0.5` scales their sum. Used in docs/learning.md, section 1.
+`max_grad_norm = 0.5` scales their sum. Used in docs/notes/value-scale.md.
 """
 
 import torch

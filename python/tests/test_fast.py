@@ -1,5 +1,5 @@
 """The fast preset (`--preset fast`) and the phase benchmark, at smoke size: learning in minutes is a benchmark
-(docs/learning.md, "Learning in minutes"), not a test; these check that the preset trains, saves, reloads and
+(docs/notes/fast-preset-probes.md), not a test; these check that the preset trains, saves, reloads and
 evaluates with finite losses, and that `python/bench_train.py` still runs and accounts for every phase."""
 
 from __future__ import annotations

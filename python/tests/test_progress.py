@@ -74,7 +74,7 @@ def test_read_skips_rows_without_returns_and_names_bad_files(tmp_path):
 
 
 def test_the_schema_is_the_documented_contract():
-    # The column names and their order are a file format others read (README, docs/learning.md): pinned here.
+    # The column names and their order are a file format others read (python/README.md, docs/learning.md): pinned here.
     assert progress.RETURNS == ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean_length")
     assert progress.DIAGNOSTICS == (
         "learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss",

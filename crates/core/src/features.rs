@@ -33,7 +33,7 @@
 //! # Version history
 //! - 2: hazards that can no longer hit and tanks that can no longer be caught are left out; hazards ordered by
 //!   arrival (stable slots); `in_lane`, `reachable` and `next_shot` added (46 values). Made PPO learn the game
-//!   (`docs/learning.md`).
+//!   (`docs/notes/features-layout.md`).
 //! - 1: the 4 nearest birds, 2 tanks, 2 aliens, 2 missiles by distance, each (present, dx, dy) (34 values).
 
 use crate::consts::{ALIEN_SHOT_PERIOD, CHOPPER_SIZE, CHOPPER_SPEED, FUEL_TANK_SPEED, X_MAX, X_MIN, Y_MAX, Y_MIN};

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The teacher-free target's runs (issue 28): `--preset pixels` (p3 of docs/learning.md, "Teacher-free probes,
-# second round": the 42x42 agent view, GAE lambda 0.98, 64 envs x 128 steps, 2 epochs at lr 1e-3, a 10 M
-# decision schedule; seeds 0-2 were started with those settings as flags, the same recipe) for training seed
-# SEED, started in RUNS/seed-SEED or resumed from its checkpoint there, for at most MINUTES of wall time this
+# The teacher-free target's runs (issue 28): `--preset pixels` (p3 of docs/notes/teacher-free-probes-second-round.md:
+# the 42x42 agent view, GAE lambda 0.98, 64 envs x 128 steps, 2 epochs at lr 1e-3, a 10 M decision schedule; seeds 0-2
+# were started with those settings as flags, the same recipe) for training seed SEED, started in RUNS/seed-SEED or
+# resumed from its checkpoint there, for at most MINUTES of wall time this
 # call; then the held-out evaluation of the model it has so far (RUNS/seed-SEED/eval-DECISIONS.json: 100 greedy
 # episodes from seed 1,000,000, its frame skip 4).
 #   bash docs/curves/pixels-probes/target.sh SEED RUNS MINUTES
