@@ -5,7 +5,7 @@ A twin env with `features` observations, reset with the same seeds and stepped w
 state at every step (determinism). A linear head on the CNN's trunk learns to predict its standardised features
 (`aux_coef`); a features teacher reads them and the policy is pulled toward the teacher's action probabilities
 (`teacher`, "kickstarting"). Only training sees either: the saved model is a pixel model. Privileged state: a
-recipe that uses this does not learn from frames alone (docs/learning.md, "Pixels").
+recipe that uses this does not learn from frames alone (docs/notes/inverted-frames-and-teacher.md).
 """
 
 from __future__ import annotations

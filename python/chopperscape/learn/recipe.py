@@ -1,4 +1,4 @@
-"""The PPO recipe's settings: :class:`Recipe` (the hyperparameters the README's figures come from), the presets
+"""The PPO recipe's settings: :class:`Recipe` (the hyperparameters docs/results.md's figures come from), the presets
 ``--preset`` names, and the checks that refuse a setting before anything is written.
 
 Plain data, no torch at import: :mod:`chopperscape.learn.seeds` and the command lines read the defaults without
@@ -48,8 +48,8 @@ RECIPE_FLAGS = (
 #: the 42×42 agent view (pixel layout 3), grayscale, 4 stacked, each action held for 4 frames (env steps then
 #: count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995 per frame
 #: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 2 epochs of 4 minibatches at a
-#: learning rate of 1e-3 over a 10 M decision schedule. Chosen by the teacher-free probes (docs/learning.md,
-#: "Teacher-free probes, second round"; p3 there); 84×84 with λ 0.95 did not train from frames alone here.
+#: learning rate of 1e-3 over a 10 M decision schedule. Chosen by the teacher-free probes
+#: (docs/notes/teacher-free-probes-second-round.md; p3 there); 84×84 with λ 0.95 did not train from frames alone here.
 #: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
 #: features teacher (`--teacher`), the faster, privileged route.
 #: What the two pixel presets share: a small CNN on grayscale frames, 4 stacked at frame skip 4, γ 0.998 a decision.
@@ -79,7 +79,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_rate": 2.5e-4,
     },
 }
-#: Learning in minutes (`--preset fast`; docs/learning.md, "Learning in minutes"): the features recipe at frame skip
+#: Learning in minutes (`--preset fast`; docs/notes/fast-preset-probes.md): the features recipe at frame skip
 #: 4 (env steps count decisions; γ = 0.998 per decision is 0.9995 per frame) for 3 M decisions, with a larger batch
 #: per Python step (128 envs × 128 steps), 2 epochs of 4 minibatches (a quarter of the recipe's gradient steps per
 #: sample) at a learning rate of 1e-3 and GAE λ 0.98, with the recipe's entropy 0.02. It carries its own step budget,
@@ -117,21 +117,21 @@ MAX_PARAMETERS = 1 << 28
 #: a linear decay that stops at 5 % of the rate at 0.95 T. The SB3 and RLlib examples follow the same schedule.
 LR_FLOOR = 0.05
 
-#: The step budget of the recipe's figures (README, docs/learning.md): 30 minutes of one quiet core. A preset may
-#: carry its own (`total_steps`); `--steps` wins over both.
+#: The step budget of the recipe's figures (docs/results.md, docs/learning.md): 30 minutes of one quiet core. A
+#: preset may carry its own (`total_steps`); `--steps` wins over both.
 DEFAULT_STEPS = 15_000_000
 
 
 @dataclass
 class Recipe:
-    """Hyperparameters of the recipe; the defaults are the ones the README's figures come from."""
+    """Hyperparameters of the recipe; the defaults are the ones docs/results.md's figures come from."""
 
     obs_type: str = "features"
     env_options: dict[str, Any] = field(default_factory=dict)
     num_envs: int = 64
     num_steps: int = 256
     #: 0.9995 and entropy 0.02: the setting that trained all ten seeds of the benchmark past the heuristic
-    #: (docs/learning.md, "Training seeds"); 0.999 and 0.01 stalled two seeds in five on refuelling.
+    #: (docs/notes/training-seeds.md); 0.999 and 0.01 stalled two seeds in five on refuelling.
     gamma: float = 0.9995
     gae_lambda: float = 0.95
     learning_rate: float = 3e-4
@@ -147,7 +147,7 @@ class Recipe:
     #: convolutions) or "nature" (Mnih et al. 2015's three), actor and critic on one trunk; "small-split" is "small"
     #: with a trunk of its own for the critic (twice the convolutions); "auto" picks "mlp" or "small" by obs_type.
     network: str = "auto"
-    #: Where the network runs: "cpu", or "cuda" where torch sees a GPU (see docs/learning.md for throughput).
+    #: Where the network runs: "cpu", or "cuda" where torch sees a GPU (see docs/notes/pixels-cost.md for throughput).
     device: str = "cpu"
     norm_obs: bool = True
     norm_reward: bool = True
@@ -159,7 +159,7 @@ class Recipe:
     #: Pixel recipes only: weight of an auxiliary loss that trains the CNN's trunk to predict the game's 46
     #: `features` (standardised) from the frames, read from a twin env that the same seeds and actions keep in
     #: the same state. Only training uses it: the policy still acts on frames alone, and the saved model has no
-    #: such head. 0 (the default) turns it off. See docs/learning.md ("Pixels").
+    #: such head. 0 (the default) turns it off. See docs/notes/pixels-budget.md.
     aux_coef: float = 0.0
     #: CNN recipes only: the network reads ``1 - frame / 255`` (the white sky as 0, sprites and the gauge
     #: positive) rather than ``frame / 255``; see :class:`chopperscape.learn.networks.Frames` for why. Models of
