@@ -4,10 +4,12 @@
 
 For each case it trains with the case's preset (``features``: the features recipe; ``fast``: ``--preset fast``;
 ``pixels``: ``--preset pixels``, a small CNN on 42×42×4 frames) for ``--steps`` env steps, timing every phase of the
-loop (:mod:`chopperscape.learn.phases`: env, observation normalisation, rollout forward, bookkeeping, GAE, update,
-logging), and prints per phase the wall time per env step and its share, beside the phase's floor: the same work
-with no Python in between (the env stepping the whole batch natively; one forward of the network over a whole
-rollout at once; each minibatch's forward + backward + Adam run back to back, times the epochs). The gap between a
+loop (:mod:`chopperscape.learn.phases`: env, observation normalisation, rollout forward, bookkeeping, GAE, the
+update's forward, backward and optimiser step, logging), and prints per phase the wall time per env step and its
+share, beside the phase's floor: the same work with no Python in between (the env stepping the whole batch
+natively; one forward of the network over a whole rollout at once; each minibatch's forward, backward and Adam
+step run back to back, times the epochs). ``--threads N`` sets the run's torch threads (one core or both); the
+header line gives the CPU seconds beside the wall seconds. The gap between a
 phase and its floor is what the loop's Python costs. On a shared machine, compare cases from one run only.
 ``--sb3`` adds, for each case with an MLP, Stable-Baselines3's PPO with the same network, batch, epochs and
 minibatches through the native adapter (`chopperscape.integrations.sb3`, `VecNormalize`), trained for the same steps
@@ -78,15 +80,24 @@ def floors(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
     size = n * t_len // recipe.num_minibatches
     xb, ab = x[:size].clone(), torch.zeros(size, dtype=torch.long, device=recipe.device)
     opt = torch.optim.Adam(agent.parameters(), lr=1e-5)
-    t = time.perf_counter()
+    spent = dict.fromkeys(("update_forward", "backward", "optimizer"), 0.0)
     for _ in range(repeats):
-        _, logp, ent, value = agent.act(xb, ab)
-        loss = -logp.mean() - 0.01 * ent.mean() + value.pow(2).mean()
+        t = time.perf_counter()
+        logits, value, _ = agent.heads(xb)
+        dist = torch.distributions.Categorical(logits=logits)
+        loss = -dist.log_prob(ab).mean() - 0.01 * dist.entropy().mean() + value.pow(2).mean()
+        t1 = time.perf_counter()
         opt.zero_grad()
         loss.backward()
+        t2 = time.perf_counter()
+        torch.nn.utils.clip_grad_norm_(list(agent.parameters()), 0.5)
         opt.step()
-    update = (time.perf_counter() - t) / (repeats * size) * recipe.update_epochs
-    return {"env": env, "obs_norm": obs_norm, "forward": forward, "update": update}
+        t3 = time.perf_counter()
+        for k, d in zip(spent, (t1 - t, t2 - t1, t3 - t2)):
+            spent[k] += d
+    # Per env step: each minibatch's cost over its samples, times the epochs.
+    per_step = {k: v / (repeats * size) * recipe.update_epochs for k, v in spent.items()}
+    return {"env": env, "obs_norm": obs_norm, "forward": forward, **per_step}
 
 
 def sb3_steps_per_second(recipe: Recipe, steps: int) -> float:
@@ -116,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--device", default="cpu", help="cpu or cuda")
     p.add_argument("--smoke", action="store_true", help="a few tiny updates per case (seconds; for the tests)")
     p.add_argument("--sb3", action="store_true", help="SB3's PPO with the same network and batch, as an anchor")
+    p.add_argument("--threads", type=int, default=None, help="torch threads of the run (default the preset's)")
     a = p.parse_args(argv)
     steps = 256 if a.smoke else a.steps
     print(
@@ -124,22 +136,27 @@ def main(argv: list[str] | None = None) -> int:
     )
     for case in a.case or CASES:
         recipe = recipe_for(case, steps, a.device, a.smoke)
+        if a.threads is not None:
+            recipe = replace(recipe, torch_threads=a.threads)
         torch.set_num_threads(recipe.torch_threads)
         phases = Phases()
         with tempfile.TemporaryDirectory() as out:
-            wall = time.perf_counter()
+            wall, cpu = time.perf_counter(), time.process_time()
             train.train(recipe, Path(out), phases=phases)
-            wall = time.perf_counter() - wall
+            wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
         done = max(phases.steps, 1)
         floor = floors(recipe)
-        print(f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s")
-        print(f"{'phase':<12} {'µs/step':>9} {'share':>7} {'floor µs':>9}")
+        print(
+            f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s "
+            f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads)"
+        )
+        print(f"{'phase':<15} {'µs/step':>9} {'share':>7} {'floor µs':>9}")
         for name in PHASES:
             sec = phases.seconds[name]
             f = f"{floor[name] * 1e6:9.2f}" if name in floor else f"{'–':>9}"
-            print(f"{name:<12} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}")
+            print(f"{name:<15} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}")
         other = wall - sum(phases.seconds.values())
-        print(f"{'(setup)':<12} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}")
+        print(f"{'(setup)':<15} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}")
         if a.sb3 and network_of(recipe) == "mlp":
             sb3 = sb3_steps_per_second(recipe, steps)
             print(f"SB3 PPO, the same network, batch and epochs: {sb3:,.0f} env steps/s ({done / wall / sb3:.1f}x)")
