@@ -127,3 +127,76 @@ def test_cnn_reads_inverted_frames_and_old_models_keep_plain_ones(tmp_path):
 def cast_frames(agent):
     """The `Frames` layer at the front of a CNN agent's trunk."""
     return agent.actor[0][0]
+
+
+@needs_torch
+def test_coords_are_coordconvs_channels_after_the_first_convolution():
+    """A convolution over the frames plus two coordinate channels (CoordConv's concatenation) equals the convolution
+    over the frames plus :class:`Coords` (a map linear in the output's row and column) with the matching weights."""
+    import torch
+
+    from chopperscape.learn.networks import Coords
+
+    torch.manual_seed(0)
+    c, h, w, k, s = 3, 21, 17, 4, 2
+    full = torch.nn.Conv2d(c + 2, 5, k, s)
+    x = torch.rand(2, c, h, w)
+    rows = torch.linspace(-1, 1, h).view(1, 1, h, 1).expand(2, 1, h, w)
+    cols = torch.linspace(-1, 1, w).view(1, 1, 1, w).expand(2, 1, h, w)
+    want = full(torch.cat([x, rows, cols], 1))
+    ho, wo = (h - k) // s + 1, (w - k) // s + 1
+    conv = torch.nn.Conv2d(c, 5, k, s)
+    coords = Coords(5, (ho, wo))
+    with torch.no_grad():
+        conv.weight.copy_(full.weight[:, :c])
+        wr, wc = full.weight[:, c].sum((1, 2)), full.weight[:, c + 1].sum((1, 2))
+        a, b = s * wr * (ho - 1) / (h - 1), s * wc * (wo - 1) / (w - 1)
+        coords.weight.copy_(torch.stack([a, b]).view(2, 5, 1, 1))
+        # The rest of the coordinate channels' response is a constant per output channel: the bias takes it.
+        constant = full(torch.cat([torch.zeros(1, c, h, w), rows[:1], cols[:1]], 1))[0, :, 0, 0] - full.bias
+        conv.bias.copy_(full.bias + constant + a + b)
+    torch.testing.assert_close(coords(conv(x)), want, rtol=0, atol=1e-5)
+
+
+@needs_torch
+def test_keypoints_are_where_each_map_peaks():
+    import torch
+
+    from chopperscape.learn.networks import Keypoints
+
+    maps = torch.zeros(1, 2, 9, 11)
+    maps[0, 0, 2, 7] = 50.0  # one sharp peak per map
+    maps[0, 1, 8, 0] = 50.0
+    out = Keypoints((9, 11))(maps).view(1, 2, 2)
+    rows, cols = torch.linspace(-1, 1, 9), torch.linspace(-1, 1, 11)
+    torch.testing.assert_close(out[0, 0], torch.stack([rows[2], cols[7]]), rtol=0, atol=1e-4)
+    torch.testing.assert_close(out[0, 1], torch.stack([rows[8], cols[0]]), rtol=0, atol=1e-4)
+    # A flat map has its keypoint at the centre.
+    assert Keypoints((9, 11))(torch.zeros(1, 1, 9, 11)).abs().max() < 1e-6
+
+
+@needs_torch
+@pytest.mark.parametrize("network", ["small-coord", "small-keypoints", "small-coord-keypoints"])
+def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
+    """Each variant is a part the recipe names: trained by the same loop, saved, reloaded and exported to the
+    operators the policy crate takes."""
+    import torch
+
+    from chopperscape.learn import export, modelfile, train
+    from chopperscape.learn.recipe import Recipe
+
+    recipe = Recipe(
+        obs_type="grayscale",
+        env_options={"obs_size": [20, 20], "frame_stack": 2, "max_fuel": 120},
+        network=network,
+        num_envs=4,
+        num_steps=16,
+        num_minibatches=2,
+        total_steps=4 * 16 * 2,
+    )
+    path = train.train(recipe, tmp_path / "run")
+    loaded = modelfile.load(path)
+    x = torch.randint(0, 256, (3, 20, 20, 2), dtype=torch.uint8)
+    assert loaded.agent.heads(x)[0].shape == (3, 5)
+    result = export.export(path, tmp_path / "p.onnx")
+    assert result["bytes"] > 0 and result.get("checked") in (True, False)

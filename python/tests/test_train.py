@@ -167,3 +167,23 @@ def test_the_pixel_preset_is_the_recipe_the_teacher_free_target_ran(seed, name):
     preset = dataclasses.asdict(Recipe(**PRESETS["pixels"], seed=seed))
     assert ran == preset
     assert (ran["teacher"], ran["aux_coef"]) == ("", 0.0)
+
+
+@needs_torch
+def test_until_stops_a_run_on_the_whole_runs_schedule(tmp_path, capsys):
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
+
+    recipe = Recipe(num_envs=4, num_steps=16, hidden=8, num_minibatches=2, total_steps=4 * 16 * 6)
+    train.train(recipe, tmp_path / "whole")
+    train.train(recipe, tmp_path / "part", until=4 * 16 * 2 + 1)
+    whole = progress_rows(tmp_path / "whole" / "progress.csv")
+    part = progress_rows(tmp_path / "part" / "progress.csv")
+    # The prefix of the whole run, the learning rate annealed over the whole budget, stopped at the first update
+    # that reaches `until`.
+    drop = [{k: v for k, v in r.items() if k != "wall_s"} for r in whole]
+    assert [{k: v for k, v in r.items() if k != "wall_s"} for r in part] == drop[: len(part)]
+    assert len(part) == 3 and len(whole) >= 6
+    with pytest.raises(SystemExit) as e:
+        train.main(["--out", str(tmp_path / "bad"), "--until", "0"])
+    assert e.value.code == 2 and "until" in capsys.readouterr().err

@@ -20,6 +20,7 @@ from .recipe import (
     check_minutes,
     check_recipe,
     check_run_folder,
+    check_until,
     read_recipe,
 )
 
@@ -44,7 +45,7 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         metavar="DIR",
         help="continue the run in DIR from its last checkpoint (resume.pt, saved every 50 updates and when a run "
         "stops), with the recipe of its recipe.json: the curve goes on as the uninterrupted run's; only --minutes "
-        "may be given with it",
+        "and --until may be given with it",
     )
     p.add_argument(
         "--steps",
@@ -57,6 +58,14 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         type=float,
         default=None,
         help="stop after this much wall time (only stops: the schedule still follows --steps)",
+    )
+    p.add_argument(
+        "--until",
+        type=int,
+        default=None,
+        metavar="STEPS",
+        help="stop once the run has made this many env steps (only stops: the schedule still follows --steps; "
+        "a probe's budget, or one session's share of a long run)",
     )
     p.add_argument(
         "--option",
@@ -118,6 +127,7 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         try:
             recipe = read_recipe(a.resume / "recipe.json")
             check_minutes(a.minutes)
+            check_until(a.until)
         except ValueError as e:
             p.error(f"--resume {a.resume}: {e}")
         return a, recipe
@@ -147,6 +157,7 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     try:
         check_recipe(recipe)
         check_minutes(a.minutes)
+        check_until(a.until)
         check_run_folder(a.out, a.force)
     except ValueError as e:
         p.error(str(e))

@@ -109,37 +109,85 @@ CNNS = {
 }
 
 
+class Coords(nn.Module):
+    """CoordConv's coordinate channels (Liu et al. 2018) after a convolution without padding: the two channels a
+    CoordConv appends to its input (each pixel's row and column, scaled to [-1, 1]) reach the convolution's output
+    as a map linear in the output's row and column, so they are added there as ``a·row + b·col`` per channel with
+    learned `a` and `b` (the constant part is the convolution's bias). The same numbers as the concatenation, with
+    no batch-sized constant (the exported graph broadcasts two fixed maps)."""
+
+    def __init__(self, channels: int, size: tuple[int, int]):
+        super().__init__()
+        h, w = size
+        self.weight = nn.Parameter(torch.zeros(2, channels, 1, 1))
+        self.register_buffer("rows", torch.linspace(-1.0, 1.0, h).view(1, 1, h, 1), persistent=False)
+        self.register_buffer("cols", torch.linspace(-1.0, 1.0, w).view(1, 1, 1, w), persistent=False)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return x + self.weight[0] * self.get_buffer("rows") + self.weight[1] * self.get_buffer("cols")
+
+
+class Keypoints(nn.Module):
+    """A spatial soft-argmax (Levine et al. 2016): each feature map becomes the expected row and column of a
+    softmax over its positions, a keypoint in [-1, 1]²: `C` maps of `H × W` give `2C` numbers that say where
+    things are, in place of the flattened maps."""
+
+    def __init__(self, size: tuple[int, int]):
+        super().__init__()
+        h, w = size
+        rows = torch.linspace(-1.0, 1.0, h).view(h, 1).expand(h, w)
+        cols = torch.linspace(-1.0, 1.0, w).view(1, w).expand(h, w)
+        self.register_buffer("grid", torch.stack([rows, cols], -1).reshape(h * w, 2), persistent=False)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        p = torch.softmax(x.flatten(2), -1)  # (N, C, H·W)
+        return (p @ self.get_buffer("grid")).flatten(1)  # (N, 2C)
+
+
+#: What a CNN network's name may add to its base ("small", "nature"): "-split" gives the critic a trunk of its own,
+#: "-coord" CoordConv's coordinates after the first convolution, "-keypoints" a spatial soft-argmax in place of the
+#: flattened maps. The names `Recipe.network` takes are in :data:`chopperscape.learn.recipe.NETWORKS`.
+VARIANTS = ("-split", "-coord", "-keypoints")
+
+
 class CnnAgent(ActorCritic):
     """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy), or,
     for a "-split" network, each on a trunk of its own (the layout of PPG's separate value network, Cobbe et al.
-    2021: the value loss no longer shapes the policy's features). `actor(obs)` gives the logits and `critic(obs)`
-    the value, as for :class:`Agent`."""
+    2021: the value loss no longer shapes the policy's features). "-coord" adds CoordConv's coordinates to the
+    first convolution (:class:`Coords`), "-keypoints" reads the last maps as keypoints (:class:`Keypoints`).
+    `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
     def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
         super().__init__()
-        self.split = network.endswith("-split")
-        network = network.removesuffix("-split")
+        base, *variants = network.split("-")
+        self.split = "split" in variants
         h, w = obs_shape[:2]
         stack = obs_shape[2] if len(obs_shape) == 3 else 1
-        name = "small-42" if network == "small" and min(h, w) < 64 else network
+        name = "small-42" if base == "small" and min(h, w) < 64 else base
         convs, width = CNNS[name]
-        size = [h, w]
+        sizes = [(h, w)]
         for _, kernel, stride in convs:
-            size = [(d - kernel) // stride + 1 for d in size]
-            if min(size) < 1:
+            sizes.append(((sizes[-1][0] - kernel) // stride + 1, (sizes[-1][1] - kernel) // stride + 1))
+            if min(sizes[-1]) < 1:
                 raise ValueError(
-                    f"frames of {h}×{w} are too small for the {network!r} network (at least 36×36 for 'nature', "
+                    f"frames of {h}×{w} are too small for the {base!r} network (at least 36×36 for 'nature', "
                     "16×16 for 'small')"
                 )
-        flat = convs[-1][0] * size[0] * size[1]
+        last = convs[-1][0]
+        flat = 2 * last if "keypoints" in variants else last * sizes[-1][0] * sizes[-1][1]
 
         def make_trunk() -> nn.Sequential:
             layers: list[nn.Module] = [Frames(invert_frames)]
             channels = stack
-            for out, kernel, stride in convs:
-                layers += [_layer(nn.Conv2d(channels, out, kernel, stride)), nn.ReLU()]
+            for i, (out, kernel, stride) in enumerate(convs):
+                layers.append(_layer(nn.Conv2d(channels, out, kernel, stride)))
+                if i == 0 and "coord" in variants:
+                    layers.append(Coords(out, sizes[1]))
+                if i < len(convs) - 1 or "keypoints" not in variants:  # the soft-argmax reads the maps before ReLU
+                    layers.append(nn.ReLU())
                 channels = out
-            return nn.Sequential(*layers, nn.Flatten(), _layer(nn.Linear(flat, width)), nn.ReLU())
+            read: nn.Module = Keypoints(sizes[-1]) if "keypoints" in variants else nn.Flatten()
+            return nn.Sequential(*layers, read, _layer(nn.Linear(flat, width)), nn.ReLU())
 
         trunk = make_trunk()
         # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.

@@ -145,7 +145,9 @@ class Recipe:
     hidden: int = 128
     #: The network: "mlp" (features) or a CNN for pixel observations, "small" (Mnih et al. 2013's two
     #: convolutions) or "nature" (Mnih et al. 2015's three), actor and critic on one trunk; "small-split" is "small"
-    #: with a trunk of its own for the critic (twice the convolutions); "auto" picks "mlp" or "small" by obs_type.
+    #: with a trunk of its own for the critic (twice the convolutions); "small-coord" adds CoordConv's coordinates
+    #: to its first convolution and "small-keypoints" reads its maps as keypoints (a spatial soft-argmax; both:
+    #: :mod:`chopperscape.learn.networks`); "auto" picks "mlp" or "small" by obs_type.
     network: str = "auto"
     #: Where the network runs: "cpu", or "cuda" where torch sees a GPU (see docs/notes/pixels-cost.md for throughput).
     device: str = "cpu"
@@ -193,7 +195,7 @@ RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
 #: The augmentations `Recipe.augment` names.
 AUGMENTS = ("none", "shift")
 #: The networks `Recipe.network` names.
-NETWORKS = ("auto", "mlp", "small", "nature", "small-split")
+NETWORKS = ("auto", "mlp", "small", "nature", "small-split", "small-coord", "small-keypoints", "small-coord-keypoints")
 
 
 def check_device(device: Any) -> None:
@@ -289,6 +291,12 @@ def check_minutes(minutes: float | None) -> None:
     """`ValueError` unless `minutes` (the wall-clock stop) is None or positive and finite."""
     if minutes is not None:
         number_in("minutes", minutes, 0.0, 1e7, low_open=True)
+
+
+def check_until(until: int | None) -> None:
+    """`ValueError` unless `until` (the env-step stop) is None or a positive number of steps."""
+    if until is not None:
+        positive_int("until", until, maximum=MAX_TOTAL_STEPS)
 
 
 def check_run_folder(out: Path, force: bool = False) -> None:

@@ -202,8 +202,9 @@ def main(argv: list[str] | None = None) -> int:
         p.error("--seeds and --out are required (or --summarise DIR)")
     if any(f == "--seed" or f.startswith("--seed=") for f in forward):
         p.error("--seed: give the training seeds with --seeds")
-    if any(f == "--minutes" or f.startswith("--minutes=") for f in forward):
-        p.error("--minutes: a multi-seed benchmark runs every seed to the same --steps budget")
+    for stop in ("--minutes", "--until"):
+        if any(f == stop or f.startswith(stop + "=") for f in forward):
+            p.error(f"{stop}: a multi-seed benchmark runs every seed to the same --steps budget")
     try:
         seeds = parse_seeds(a.seeds)
     except ValueError as err:

@@ -42,7 +42,7 @@ from .._cli import print_line, run_command
 from . import flags, progress
 from .phases import OFF, Phases
 from .ppo import UpdateStats, learning_rate
-from .recipe import Recipe, check_minutes, check_recipe
+from .recipe import Recipe, check_minutes, check_recipe, check_until
 from .rollout import Rollout, advantages
 from .run import Run, RunWriteError
 
@@ -69,6 +69,7 @@ def train(
     force: bool = False,
     phases: Phases = OFF,
     resume: bool = False,
+    until: int | None = None,
 ) -> Path:
     """Runs PPO for `recipe.total_steps` env steps, or until `minutes` of wall time if that comes first (the
     schedules still follow `recipe.total_steps`, so a run cut short is the prefix of the full one); returns the
@@ -76,9 +77,11 @@ def train(
     With `resume`, continues the run in `out` from its last checkpoint (`resume.pt`): the curve goes on as the
     uninterrupted run's would. `ValueError` for a setting out of range or a folder that holds a run (unless `force`
     or `resume`), before anything is written; `_signals.Interrupted` after a signal, once the model reached so far
-    is saved. The run's folder, state and variants are :class:`~.run.Run`'s; this is PPO."""
+    is saved. `until` stops the run at that many env steps (the schedules still follow `total_steps`). The run's
+    folder, state and variants are :class:`~.run.Run`'s; this is PPO."""
     check_recipe(recipe)
     check_minutes(minutes)
+    check_until(until)
     r = recipe
     with Run(r, Path(out), force=force, resume=resume) as run:
         s, p = run.state, run.parts
@@ -99,7 +102,8 @@ def train(
         backward = phases.timed("backward", torch.Tensor.backward)
         optimize, log = phases.timed("optimizer", optimize), phases.timed("logging", run.log)
         phases.start()
-        while s.env_steps < r.total_steps and not run.stopping(minutes):
+        end = r.total_steps if until is None else min(until, r.total_steps)
+        while s.env_steps < end and not run.stopping(minutes):
             lr = optimizer.param_groups[0]["lr"] = learning_rate(r, s.env_steps)
 
             # --- Rollout: NEXT_STEP autoreset; the step after an episode's end is a reset step (not valid) ---------
@@ -179,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def command() -> int:
         try:
-            path = train(recipe, a.out, a.minutes, force=a.force, resume=a.resume is not None)
+            path = train(recipe, a.out, a.minutes, force=a.force, resume=a.resume is not None, until=a.until)
         except (FloatingPointError, RuntimeError) as e:  # a loss that is not finite, a twin env out of step
             raise RuntimeError(f"training stopped: {e}; the model saved last is kept") from None
         return print_line(json.dumps({"model": str(path), "progress": str(a.out / "progress.csv")}))
