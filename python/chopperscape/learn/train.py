@@ -110,7 +110,7 @@ def train(
             s.episodes.new_update()
             for t in range(r.num_steps):
                 valid = ~s.next_done
-                with torch.no_grad():
+                with torch.inference_mode():
                     action, logp, _, value = act(s.next_obs)
                 buf.store(t, s.next_obs, action, logp, value, valid)
                 actions = action.cpu().numpy()
