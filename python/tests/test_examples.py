@@ -85,3 +85,17 @@ def test_the_vector_env_uses_one_thread_unless_asked():
     # Measured (python/README.md, "Threads"): on 2-vCPU hosts a second thread loses whenever the CPU is shared.
     assert chopperscape.VectorEnv(1024, obs_type="features").num_threads == 1
     assert chopperscape.VectorEnv(1024, num_threads=2, obs_type="features").num_threads == 2
+
+
+def test_the_trunk_probe_reads_values_out_of_a_pixel_policys_embedding(tmp_path):
+    pytest.importorskip("torch", reason="torch is not installed: the trunk probe's smoke test is skipped")
+    out = tmp_path / "probe.csv"
+    args = ("--samples", "600", "--held-out", "300", "--envs", "8", "--init", "--out", str(out))
+    init = _example("trunk_probe.py", str(ROOT / "models" / "ppo-pixels.pt"), *args)
+    assert init["network"] == "init" and init["held_out"] == 300
+    with open(out, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["network"] for r in rows] == ["trained", "init"]
+    for row in rows:  # a smoke size: the figures (docs/notes/pixels-speed-and-probes.md) need 20,000 decisions
+        for value in ("fuel", "chopper_y", "bird0_dx", "tank0_dy"):
+            assert -10.0 < float(row[value]) <= 1.0, row
