@@ -65,6 +65,7 @@ from .recipe import (
     check_run_folder,
     network_of,
 )
+from .rundir import RECIPE_KEY, check_recipe_hash, locked, recipe_hash, remove_stale_parts
 
 try:
     import torch
@@ -163,6 +164,7 @@ RESUME_FORMAT = "chopperscape-ppo-resume/1"
 CHECKPOINT_EVERY = 50
 
 
+@locked  # the run folder is locked for the run's life (rundir.RunLock): a second writer is refused
 def train(
     recipe: Recipe,
     out: Path,
@@ -182,6 +184,7 @@ def train(
     check_recipe(recipe)
     check_minutes(minutes)
     saved = _read_resume(out) if resume else None
+    check_recipe_hash(saved, recipe, out)  # a checkpoint resumes only the run that saved it
     if not resume:
         check_run_folder(out, force)
     teacher = load_teacher(recipe) if recipe.teacher else None
@@ -282,6 +285,7 @@ def train(
     def checkpoint_state() -> dict:
         return {
             "format": RESUME_FORMAT,
+            RECIPE_KEY: recipe_hash(recipe),
             "agent": agent.state_dict(),
             "optimizer": optimizer.state_dict(),
             "envs": env_state(envs),
@@ -308,6 +312,7 @@ def train(
             with _atomic.replacing(path) as tmp:
                 torch.save(state, tmp)
 
+    remove_stale_parts(out)  # what a killed run of this folder left half-written
     start = time.monotonic()
     model_path = out / "model.pt"
     csv_path = out / "progress.csv"
