@@ -333,7 +333,7 @@ def test_a_normalisation_file_nested_too_deeply_is_refused_by_name(tmp_path):
     from chopperscape.integrations import sb3
 
     (tmp_path / "vecnormalize.json").write_text("{" + '"a":{' * 50_000 + "}" * 50_001)
-    with pytest.raises(ValueError, match="vecnormalize.json is not a usable normalisation file: it is nested"):
+    with pytest.raises(ValueError, match=r"vecnormalize\.json is not a usable normalisation file: it is nested"):
         sb3.load_normalization(tmp_path)
 
 
@@ -422,7 +422,9 @@ def test_onnx_files_with_bad_metadata_no_input_or_the_wrong_width_are_refused(tm
     from onnx import TensorProto, helper
 
     def tiny(width: int | None) -> object:
-        starts, ends, axes = (helper.make_tensor(n, TensorProto.INT64, [1], [v]) for n, v in (("s", 0), ("e", 5), ("a", 1)))
+        starts, ends, axes = (
+            helper.make_tensor(n, TensorProto.INT64, [1], [v]) for n, v in (("s", 0), ("e", 5), ("a", 1))
+        )
         if width is None:  # no input at all: constant logits
             logits = helper.make_tensor("c", TensorProto.FLOAT, [1, 5], [0.0] * 5)
             nodes = [helper.make_node("Constant", [], ["logits"], value=logits)]
@@ -431,7 +433,9 @@ def test_onnx_files_with_bad_metadata_no_input_or_the_wrong_width_are_refused(tm
             nodes = [helper.make_node("Slice", ["obs", "s", "e", "a"], ["logits"])]
             inputs = [helper.make_tensor_value_info("obs", TensorProto.FLOAT, ["batch", width])]
         out = helper.make_tensor_value_info("logits", TensorProto.FLOAT, ["batch", 5])
-        graph = helper.make_graph(nodes, "tiny", inputs, [out], initializer=[] if width is None else [starts, ends, axes])
+        graph = helper.make_graph(
+            nodes, "tiny", inputs, [out], initializer=[] if width is None else [starts, ends, axes]
+        )
         return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=8)
 
     cases = [
@@ -537,6 +541,8 @@ def test_rows_sh_reads_seeds_as_numbers_and_ranges_never_as_file_patterns(tmp_pa
 
 def test_rows_sh_removes_its_claim_when_a_seed_fails(tmp_path):
     runs = tmp_path / "runs"
-    done = _rows_sh("fast", "sticky-v0", str(runs), "1", env={"DRY_RUN": "", "PYTHON": "false", "RESULTS": str(tmp_path)})
+    done = _rows_sh(
+        "fast", "sticky-v0", str(runs), "1", env={"DRY_RUN": "", "PYTHON": "false", "RESULTS": str(tmp_path)}
+    )
     assert done.returncode != 0
     assert not list(runs.glob("*.claim")), list(runs.iterdir())

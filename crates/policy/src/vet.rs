@@ -321,9 +321,12 @@ fn node(
     {
         // The input's elements where they are known: a value of the file's constants, or the observation itself.
         let data = node.input.first().map(String::as_str);
-        let elements = inputs.first().copied().flatten().and_then(|b| b.constant).or_else(|| {
-            observation.and_then(|(name, n)| (data == Some(name)).then_some(n))
-        });
+        let elements = inputs
+            .first()
+            .copied()
+            .flatten()
+            .and_then(|b| b.constant)
+            .or_else(|| observation.and_then(|(name, n)| (data == Some(name)).then_some(n)));
         reshape(&shape, elements)?;
     }
     // Elements of a value that follows from constants alone (tract computes it while it loads the graph).
