@@ -33,7 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import __version__, _atomic, _core, modes
+from .. import PIXELS_VERSION, __version__, _atomic, _core, modes
 from .._cli import OBSERVATION_OPTIONS, PYTHON_BOOL_OPTIONS
 from ..learn.export import TRAIN_SEEDS
 from ..policies import NAMES, VectorPolicy
@@ -160,12 +160,22 @@ def _onnx(path: Path, options: dict, rules: dict, stochastic: bool, run: int, in
         protocol.check_training_seeds(first, count, f"policy file {str(path)!r}: its training")
     if len(ranges) == 1:  # several ranges (one per RLlib runner) stay in the recorded metadata only
         info["train_seeds"] = list(ranges[0])
-    # The observation it was trained on, `look` (the pixel layout) included: the metadata's own key where it has
-    # one, else its env_options'. `--option` may change it (and the model's input is then checked against it).
+    # The observation it was trained on, its pixel layout included: an older layout (`pixels_version`) is drawn
+    # under the options `_core.PIXEL_LAYOUTS` names (`look="art"` for layout 2), as the `.pt` it was exported
+    # from plays (`learn.model.learned_options`); its env_options' own `look` where it has one. `--option` may
+    # change them (and the model's input is then checked against the observation they give).
+    obs_type = meta.get("obs_type", "features")
+    layout: dict[str, Any] = {}
+    if obs_type != "features":
+        version = meta.get("pixels_version", str(PIXELS_VERSION))
+        if version != str(PIXELS_VERSION) and not (version.isdigit() and int(version) in _core.PIXEL_LAYOUTS):
+            raise ValueError(
+                f"policy file {str(path)!r}: it learned pixel layout {version[:20]!r}, and this chopperscape draws "
+                f"{PIXELS_VERSION} (and the older {', '.join(map(str, sorted(_core.PIXEL_LAYOUTS)))})"
+            )
+        layout = dict(_core.PIXEL_LAYOUTS.get(int(version), {}))
     obs = {k: v for k, v in trained.items() if k in OBS_OPTIONS}
-    if isinstance(meta.get("look"), str):
-        obs["look"] = meta["look"]
-    obs = {"obs_type": meta.get("obs_type", "features"), **obs, **options}
+    obs = {"obs_type": obs_type, **layout, **obs, **options}
     if "obs_size" in obs and isinstance(obs["obs_size"], list):
         obs["obs_size"] = tuple(obs["obs_size"])
     info.update(kind="onnx", recipe=meta)

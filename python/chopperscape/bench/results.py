@@ -81,6 +81,12 @@ def _need(cond: bool, what: str) -> None:
         raise ResultsError(what)
 
 
+def _short(n: int) -> str:
+    """An integer for a message: its digits, or for a long one its first digits and how many there are."""
+    text = str(n)
+    return text if len(text) <= 24 else f"{text[:12]}… ({len(text.lstrip('-'))} digits)"
+
+
 def _int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
@@ -141,8 +147,8 @@ def check(doc: Any) -> dict[str, Any]:
         _need(1 <= ep["steps"] <= protocol.MAX_EPISODE_STEPS, f"`episodes[{k}].steps` out of 1..=10000")
         _need(
             MIN_RETURN <= ep["return"] <= ep["steps"] * skip,
-            f"`episodes[{k}].return` {ep['return']} is out of {MIN_RETURN}..={ep['steps'] * skip}: at most +1 per "
-            f"underlying step ({ep['steps']} steps at frame skip {skip}), and -10 once for a bird",
+            f"`episodes[{k}].return` {_short(ep['return'])} is out of {MIN_RETURN}..={ep['steps'] * skip}: at most "
+            f"+1 per underlying step ({ep['steps']} steps at frame skip {skip}), and -10 once for a bird",
         )
         _need(ep["cause"] in CAUSES, f"`episodes[{k}].cause` must be one of {', '.join(CAUSES)}")
         _need(

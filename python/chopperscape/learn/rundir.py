@@ -63,7 +63,7 @@ class RunLock:
     def __init__(self, out: str | os.PathLike):
         self.out = Path(out)
         self.fd: int | None = None
-        self.made = False
+        self.made: list[Path] = []  # the folders __enter__ made, innermost first
 
     def __enter__(self) -> RunLock:
         out = self.out
@@ -72,9 +72,10 @@ class RunLock:
         if fcntl is None:
             return self
         if not os.path.lexists(out):
+            missing = [out, *(p for p in out.parents if not os.path.lexists(p))]
             try:
                 out.mkdir(parents=True)
-                self.made = True
+                self.made = [p for p in missing if not os.path.lexists(p) or p.is_dir()]
             except FileExistsError:
                 pass
             except OSError as e:
@@ -98,12 +99,12 @@ class RunLock:
         return self
 
     def _unmake(self) -> None:
-        if self.made:
+        for folder in self.made:  # innermost first, each only if nothing was written in it
             try:
-                self.out.rmdir()  # only if nothing was written in it
+                folder.rmdir()
             except OSError:
-                pass
-            self.made = False
+                break
+        self.made = []
 
     def __exit__(self, *exc: object) -> None:
         self.release()
