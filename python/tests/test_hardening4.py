@@ -125,9 +125,10 @@ def test_look_is_an_observation_option_of_the_bench(capsys):
 @pytest.mark.parametrize(
     "args", [["--seeds", "1000000"], ["--seeds", "0-1", "--eval-seed", "0"], ["--seeds", "999999", "--num-envs", "4"]]
 )
-def test_the_seed_runner_refuses_training_seeds_that_overlap_its_held_out_seeds(tmp_path, capsys, args):
+def test_the_seed_runner_refuses_training_seeds_that_overlap_its_held_out_seeds(tmp_path, capsys, monkeypatch, args):
     from chopperscape.learn import seeds
 
+    monkeypatch.setattr(seeds, "run_seeds", lambda *a: pytest.fail("the seeds were trained"))
     out = tmp_path / "seeds"
     with pytest.raises(SystemExit) as done:
         seeds.main([*args, "--out", str(out)])
