@@ -14,9 +14,11 @@
 The mode fixes the rules (a model's own training rules are replaced by the mode's); `--option NAME=VALUE` takes
 observation options only. The run is the protocol's (:mod:`.protocol`): 100 episodes from seed 1,000,000, the
 10,000-step limit, greedy actions for trained policies (`--stochastic` samples, seeded by `--policy-seed`). The
-results file (:mod:`.results`) is written atomically to `--out` (otherwise printed). Exit status 0; 2 with one
-line on standard error for a bad argument, a policy that cannot be read, or a policy trained on the evaluation
-seeds.
+results file (:mod:`.results`) is written atomically to `--out` (otherwise printed); an `--out` that is the policy
+file, a folder, a device or a pipe is refused before anything is played. A model plays the observation it learned
+(an ONNX export its pixel layout, `look`, as its `.pt` does), and the results file records it. Exit status 0; 2
+with one line on standard error for a bad argument, a policy that cannot be read or returns no actions, or a
+policy trained on the evaluation seeds; 130 on Ctrl-C.
 """
 
 from __future__ import annotations
