@@ -14,7 +14,9 @@
 #            run by $RLLIB_PYTHON, default .venv-rllib/bin/python), exported with --export and evaluated from the ONNX
 # A seed whose results file exists is skipped, so a long row continues where it stopped, and so is a seed another
 # rows.sh is training (its claim, RUNS_DIR/seed-S.claim, holds a live process id): several rows.sh on one row share
-# its seeds, one process a core. DRY_RUN=1 prints each command (shell-quoted, one a line) instead of running it.
+# its seeds, one process a core; a claim is removed when its seed ends, the script fails or is stopped. SEEDS are
+# numbers and ranges (3, 0-9; 0-9 by default), nothing else. DRY_RUN=1 prints each command (shell-quoted, one a
+# line) instead of running it.
 #     bash docs/bench/rows.sh ROW MODE RUNS_DIR [SEEDS...]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -23,7 +25,26 @@ row=${1:?a row: fast, features, sb3-ppo, sb3-dqn, rllib-ppo or pixels}
 mode=${2:?a mode: sticky-v0 or full-v0}
 runs=${3:?a folder for the runs}
 shift 3
-seeds=("${@:-0 1 2 3 4 5 6 7 8 9}")
+# The seeds: numbers and ranges only, read as text (never a shell pattern: '*' is refused, not a file list).
+seeds=()
+for arg in "${@:-0-9}"; do
+  read -r -a items <<<"$arg"
+  for item in "${items[@]}"; do
+    if [[ ! $item =~ ^([0-9]{1,9})(-([0-9]{1,9}))?$ ]]; then
+      echo "error: seed '$item': allowed a number or a range FIRST-LAST (e.g. 3 or 0-9)" >&2
+      exit 2
+    fi
+    lo=$((10#${BASH_REMATCH[1]}))
+    hi=$((10#${BASH_REMATCH[3]:-${BASH_REMATCH[1]}}))
+    if ((hi < lo || hi - lo >= 1000)); then
+      echo "error: seeds '$item': allowed FIRST-LAST with FIRST <= LAST, at most 1000 seeds" >&2
+      exit 2
+    fi
+    for ((s = lo; s <= hi; s++)); do
+      [[ " ${seeds[*]} " == *" $s "* ]] || seeds+=("$s")
+    done
+  done
+done
 steps=${STEPS:-}
 # claim FILE: takes a seed for this process (the claim holds its process id), unless a live process holds it.
 claim() {
@@ -33,6 +54,12 @@ claim() {
   rm -f "$1"  # its process is gone: a stopped run, whose seed starts again (a pixel run resumes)
   (set -o noclobber; echo $$ >"$1") 2>/dev/null
 }
+# The claim this process holds, removed when its seed ends, and when the script fails or is stopped.
+claimed=""
+release() { if [ -n "$claimed" ]; then rm -f "$claimed"; claimed=""; fi; }
+trap release EXIT
+trap 'release; exit 130' INT
+trap 'release; exit 143' TERM
 # run CMD...: runs it (quietly: its standard output dropped), or prints it under DRY_RUN.
 run() { if [ -n "${DRY_RUN:-}" ]; then local line; line=$(printf '%q ' "$@"); echo "${line% }"; else "$@"; fi; }
 quietly() { if [ -n "${DRY_RUN:-}" ]; then run "$@"; else "$@" >/dev/null; fi; }
@@ -51,7 +78,7 @@ case $mode in
   sticky-v0 | full-v0) ;;
   *) echo "error: unknown mode '$mode' for a trained row: allowed sticky-v0, full-v0 (frame skip 4)" >&2; exit 2 ;;
 esac
-for s in ${seeds[*]}; do
+for s in "${seeds[@]}"; do
   out=$runs/seed-$s
   results=${RESULTS:-docs/bench/results}/$mode.$row.seed$s.json
   if [ -f "$results" ]; then
@@ -64,6 +91,7 @@ for s in ${seeds[*]}; do
       echo "seed $s is being trained by process $(cat "$runs/seed-$s.claim"): skipped"
       continue
     fi
+    claimed=$runs/seed-$s.claim
   fi
   case $row in
     fast)
@@ -96,5 +124,5 @@ for s in ${seeds[*]}; do
   esac
   run "$PY" -m chopperscape.bench evaluate "$model" --mode "$mode" --name "$name" "${given[@]}" \
     --out "$results"
-  [ -n "${DRY_RUN:-}" ] || rm -f "$runs/seed-$s.claim"
+  release
 done

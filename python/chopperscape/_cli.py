@@ -8,6 +8,7 @@ import argparse
 import contextlib
 import json
 import os
+import signal
 import sys
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
@@ -88,7 +89,8 @@ def run_command(command: Callable[[], int]) -> int:
       a missing optional package), as argparse refuses a usage;
     - `OSError`, `RuntimeError`, `FloatingPointError`: `error: ...`, 1 (`FAILED`): the work failed (a write, a
       check, a training step);
-    - `_signals.Interrupted`: its own message (`interrupted; ...`), 128 + the signal: 130, 143, 129.
+    - `_signals.Interrupted`: its own message (`interrupted; ...`), 128 + the signal: 130, 143, 129;
+      `KeyboardInterrupt` (Ctrl-C outside a guard): `interrupted`, 130.
 
     An `OSError` in its own words (no file name) is said without its errno (`[Errno 28]`). A command says what
     failed in its exception's message, so nothing is added to it here."""
@@ -97,6 +99,9 @@ def run_command(command: Callable[[], int]) -> int:
     except _signals.Interrupted as e:
         print(e, file=sys.stderr)
         return e.exit_code
+    except KeyboardInterrupt:  # Ctrl-C where no guard defers it: one line, as a deferred signal says it
+        print("interrupted", file=sys.stderr)
+        return 128 + signal.SIGINT
     except (ValueError, ImportError) as e:
         print(f"error: {e}", file=sys.stderr)
         return REFUSED

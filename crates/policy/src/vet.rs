@@ -155,8 +155,9 @@ pub fn model(proto: &ModelProto, file_len: usize) -> Result<(), PolicyError> {
     }
     // The observation, batched: tract is given [1, obs_shape...], and the metadata's shape has 1 to 3 sizes.
     values.entry(&inputs[0].name).or_insert(Bound { rank: 4, constant: None });
+    let observation = observation_elements(inputs[0]).map(|n| (inputs[0].name.as_str(), n));
     for node in &graph.node {
-        let out = self::node(node, file_len, &values, &tensors)?;
+        let out = self::node(node, file_len, &values, &tensors, observation)?;
         if node.op_type == "Constant"
             && let (Some(name), Some(t)) = (node.output.first(), node.attribute.iter().find_map(|a| a.t.as_ref()))
         {
@@ -198,6 +199,19 @@ fn declared(v: &ValueInfoProto) -> Result<(), PolicyError> {
     Ok(())
 }
 
+/// The elements of one observation as the graph's input declares it, where every size is declared (a named size,
+/// the batch axis, counts 1: tract is given one observation); `None` otherwise.
+fn observation_elements(v: &ValueInfoProto) -> Option<u64> {
+    let Some(type_proto::Value::TensorType(t)) = v.r#type.as_ref().and_then(|t| t.value.as_ref()) else {
+        return None;
+    };
+    t.shape.as_ref()?.dim.iter().try_fold(1u64, |n, d| match &d.value {
+        Some(tensor_shape_proto::dimension::Value::DimValue(d)) => n.checked_mul(u64::try_from(*d).ok()?),
+        Some(tensor_shape_proto::dimension::Value::DimParam(_)) => Some(n),
+        None => None,
+    })
+}
+
 /// The int64 values of a constant tensor (shapes, axes), if it holds them in a form this reads.
 fn int64_values(t: &TensorProto) -> Option<Vec<i64>> {
     if t.data_type != 7 {
@@ -219,6 +233,7 @@ fn node(
     file_len: usize,
     values: &HashMap<&str, Bound>,
     tensors: &HashMap<&str, &TensorProto>,
+    observation: Option<(&str, u64)>,
 ) -> Result<Bound, PolicyError> {
     let op = node.op_type.as_str();
     let default_domain = node.domain.is_empty() || node.domain == "ai.onnx";
@@ -301,6 +316,19 @@ fn node(
     if op == "Slice" && ints_at(4).is_some_and(|steps| steps.contains(&0)) {
         return Err(refuse("operator \"Slice\" has a step of 0"));
     }
+    if op == "Reshape"
+        && let Some(shape) = ints_at(1)
+    {
+        // The input's elements where they are known: a value of the file's constants, or the observation itself.
+        let data = node.input.first().map(String::as_str);
+        let elements = inputs
+            .first()
+            .copied()
+            .flatten()
+            .and_then(|b| b.constant)
+            .or_else(|| observation.and_then(|(name, n)| (data == Some(name)).then_some(n)));
+        reshape(&shape, elements)?;
+    }
     // Elements of a value that follows from constants alone (tract computes it while it loads the graph).
     let all_known = !node.input.is_empty() && inputs.iter().flatten().all(|b| b.constant.is_some());
     let known = |b: &Option<Bound>| b.and_then(|b| b.constant).unwrap_or(1);
@@ -319,6 +347,40 @@ fn node(
     };
     Ok(Bound { rank, constant })
 }
+/// Checks a `Reshape`'s constant target `shape`: sizes of at least −1 (−1: inferred, at most once; 0: the input's
+/// size on that axis), whose fixed sizes multiply (checked) to at most [`MAX_ELEMENTS`], and that can hold the
+/// input's `elements` where they are known (a value of the file's constants). A 46-value observation reshaped to
+/// 2^40 × 2^40 (or 2^32 × 2^32, whose product wraps to 0 in 64 bits) was accepted and played.
+fn reshape(shape: &[i64], elements: Option<u64>) -> Result<(), PolicyError> {
+    let bad = |why: &str| refuse(format!("operator \"Reshape\" has the shape {shape:?}, {why}"));
+    let mut inferred = 0;
+    let mut copied = false;
+    let mut fixed = 1u64;
+    for &d in shape {
+        match d {
+            -1 => inferred += 1,
+            0 => copied = true,
+            d if d > 0 => {
+                fixed = fixed
+                    .checked_mul(d as u64)
+                    .filter(|&n| n <= MAX_ELEMENTS as u64)
+                    .ok_or_else(|| bad(&format!("more than the {MAX_ELEMENTS} elements a policy's values may hold")))?;
+            }
+            _ => return Err(bad("a size below -1")),
+        }
+    }
+    if inferred > 1 {
+        return Err(bad("more than one size to infer (-1)"));
+    }
+    if let (Some(n), false) = (elements, copied) {
+        let holds = if inferred == 1 { n % fixed == 0 } else { n == fixed };
+        if !holds {
+            return Err(bad(&format!("which cannot hold its input's {n} elements")));
+        }
+    }
+    Ok(())
+}
+
 /// Checks one tensor of the file (an initializer, a `Constant`'s value): its data inside the file, at most
 /// [`MAX_RANK`] axes and no more elements than the file has bytes. Gives its elements.
 fn tensor(t: &TensorProto, file_len: usize) -> Result<u64, PolicyError> {

@@ -215,6 +215,52 @@ fn axes_and_perms_out_of_range_are_refused() {
 }
 
 #[test]
+fn a_reshape_to_a_shape_that_cannot_hold_its_input_is_refused() {
+    // A 46-value observation reshaped to 2^40 × 2^40 (or 2^32 × 2^32, whose product wraps to 0 in 64 bits) and
+    // flattened back was accepted, and played (issue 45).
+    let back = node("Reshape", &["x", "flat"], "y", vec![]);
+    let slice = node("Slice", &["y", "starts", "ends", "axes"], "logits", vec![]);
+    for (shape, message) in [
+        (vec![1 << 40, 1 << 40], "more than the 67108864 elements"),
+        (vec![1 << 32, 1 << 32], "more than the 67108864 elements"),
+        (vec![1 << 32, 1 << 32, -1], "more than the 67108864 elements"),
+        (vec![1, 1 << 13, 1 << 13], "which cannot hold its input's 46 elements"),
+        (vec![1, 47], "which cannot hold its input's 46 elements"),
+        (vec![7, -1], "which cannot hold its input's 46 elements"),
+        (vec![-1, -1], "more than one size to infer"),
+        (vec![-2, -23], "a size below -1"),
+    ] {
+        let nodes = vec![node("Reshape", &["obs", "s"], "x", vec![]), back.clone(), slice.clone()];
+        let weights = vec![
+            int64s("s", &shape),
+            int64s("flat", &[1, -1]),
+            int64s("starts", &[0]),
+            int64s("ends", &[5]),
+            int64s("axes", &[1]),
+        ];
+        let err = refused(&format!("reshape to {shape:?}"), &model(nodes, weights)).to_string();
+        assert!(err.contains("operator \"Reshape\" has the shape") && err.contains(message), "{shape:?}: {err}");
+    }
+    // A constant reshaped to a shape that cannot hold it, and the shapes that can: the observation as [1, 46], [2, 23]
+    // (batch 1 read as 2 × 23), [-1, 46], [0, 46] (0 copies the input's size) load.
+    let nodes = vec![node("Reshape", &["c", "s"], "logits", vec![])];
+    let weights = vec![floats("c", &[5], &[0.0; 5]), int64s("s", &[1, 6])];
+    let err = refused("constant reshape", &model(nodes, weights)).to_string();
+    assert!(err.contains("which cannot hold its input's 5 elements"), "{err}");
+    for shape in [vec![1i64, 46], vec![2, 23], vec![-1, 46], vec![0, 46]] {
+        let nodes = vec![node("Reshape", &["obs", "s"], "x", vec![]), back.clone(), slice.clone()];
+        let weights = vec![
+            int64s("s", &shape),
+            int64s("flat", &[1, -1]),
+            int64s("starts", &[0]),
+            int64s("ends", &[5]),
+            int64s("axes", &[1]),
+        ];
+        Policy::from_bytes(&model(nodes, weights)).unwrap_or_else(|e| panic!("{shape:?}: {e}"));
+    }
+}
+
+#[test]
 fn values_that_multiply_to_terabytes_are_refused_before_they_are_made() {
     // Constants of 40 elements reshaped onto six distinct axes and added: tract computes such values while it
     // loads the graph (40^6 elements, 16 GB; 40^5 took 4 s and 400 MB before this was checked).

@@ -56,6 +56,8 @@ def main(argv: list[str] | None = None) -> int:
                     seeds = (int(first), int(count) if sep else 1)
                 except ValueError:
                     p.error(f"--train-seeds {a.train_seeds!r}: expected FIRST:COUNT, e.g. 0:64")
+            if a.out is not None:
+                results.check_out(a.out, a.policy)
             doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds, a.name)
             text = results.dumps(doc)
             if a.out is None:
@@ -63,9 +65,9 @@ def main(argv: list[str] | None = None) -> int:
             results.write_atomic(a.out, text)
             s = doc["summary"]
             return print_line(f"{a.out}: {a.mode}, mean return {s['mean_return']}, score {s['score']}")
+        if not 100 <= a.resamples <= report.MAX_RESAMPLES:
+            p.error(f"--resamples {a.resamples}: allowed an integer in 100..={report.MAX_RESAMPLES}")
         docs = report.load_all(a.results)
-        if a.resamples < 100:
-            p.error("--resamples: at least 100")
         rows = report.report(docs, a.resamples, a.pool_modes)
         if a.plots:
             report.plot(docs, rows, Path(a.plots), a.format, a.pool_modes)

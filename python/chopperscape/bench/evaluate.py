@@ -14,9 +14,11 @@
 The mode fixes the rules (a model's own training rules are replaced by the mode's); `--option NAME=VALUE` takes
 observation options only. The run is the protocol's (:mod:`.protocol`): 100 episodes from seed 1,000,000, the
 10,000-step limit, greedy actions for trained policies (`--stochastic` samples, seeded by `--policy-seed`). The
-results file (:mod:`.results`) is written atomically to `--out` (otherwise printed). Exit status 0; 2 with one
-line on standard error for a bad argument, a policy that cannot be read, or a policy trained on the evaluation
-seeds.
+results file (:mod:`.results`) is written atomically to `--out` (otherwise printed); an `--out` that is the policy
+file, a folder, a device or a pipe is refused before anything is played. A model plays the observation it learned
+(an ONNX export its pixel layout, `look`, as its `.pt` does), and the results file records it. Exit status 0; 2
+with one line on standard error for a bad argument, a policy that cannot be read or returns no actions, or a
+policy trained on the evaluation seeds; 130 on Ctrl-C.
 """
 
 from __future__ import annotations
@@ -33,14 +35,16 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import __version__, _atomic, modes
+from .. import PIXELS_VERSION, __version__, _atomic, _core, modes
+from ..options import OBSERVATION_OPTIONS, PYTHON_BOOL_OPTIONS
 from ..policies import NAMES, VectorPolicy
 from ..policyfile import TRAIN_SEEDS
 from ..vector import VectorEnv
 from . import protocol, results
 
-#: What `--option` takes: observation options only (a mode fixes the rules; the protocol the step limit).
-OBS_OPTIONS = ("obs_type", "obs_size", "frame_stack", "hud", "hud_style", "keep_dim")
+#: What `--option` takes: observation options only (a mode fixes the rules; the protocol the step limit): the
+#: core's observation settings (`look` included) and the Python environments' `keep_dim`.
+OBS_OPTIONS = (*OBSERVATION_OPTIONS, *PYTHON_BOOL_OPTIONS)
 
 Act = Callable[[np.ndarray, VectorEnv], np.ndarray]
 
@@ -146,23 +150,68 @@ def _onnx(path: Path, options: dict, rules: dict, stochastic: bool, run: int, in
         )
     try:
         trained = json.loads(meta.get("env_options", "{}"))
-    except ValueError:
-        raise ValueError(f"policy file {str(path)!r}: its env_options metadata is not JSON") from None
+    except (ValueError, RecursionError):
+        trained = None
+    if not isinstance(trained, dict):
+        raise ValueError(
+            f"policy file {str(path)!r}: its env_options metadata must be a JSON object of options, e.g. "
+            '{"frame_skip": 4}'
+        )
     ranges = _train_seeds(meta.get(TRAIN_SEEDS), path)
     for first, count in ranges:
         protocol.check_training_seeds(first, count, f"policy file {str(path)!r}: its training")
     if len(ranges) == 1:  # several ranges (one per RLlib runner) stay in the recorded metadata only
         info["train_seeds"] = list(ranges[0])
+    # The observation it was trained on, its pixel layout included: an older layout (`pixels_version`) is drawn
+    # under the options `_core.PIXEL_LAYOUTS` names (`look="art"` for layout 2), as the `.pt` it was exported
+    # from plays (`learn.modelfile.learned_options`); its env_options' own `look` where it has one. `--option` may
+    # change them (and the model's input is then checked against the observation they give).
+    obs_type = meta.get("obs_type", "features")
+    layout: dict[str, Any] = {}
+    if obs_type != "features":
+        version = meta.get("pixels_version", str(PIXELS_VERSION))
+        if version != str(PIXELS_VERSION) and not (version.isdigit() and int(version) in _core.PIXEL_LAYOUTS):
+            raise ValueError(
+                f"policy file {str(path)!r}: it learned pixel layout {version[:20]!r}, and this chopperscape draws "
+                f"{PIXELS_VERSION} (and the older {', '.join(map(str, sorted(_core.PIXEL_LAYOUTS)))})"
+            )
+        layout = dict(_core.PIXEL_LAYOUTS.get(int(version), {}))
     obs = {k: v for k, v in trained.items() if k in OBS_OPTIONS}
-    obs = {"obs_type": meta.get("obs_type", "features"), **obs, **options}
+    obs = {"obs_type": obs_type, **layout, **obs, **options}
     if "obs_size" in obs and isinstance(obs["obs_size"], list):
         obs["obs_size"] = tuple(obs["obs_size"])
     info.update(kind="onnx", recipe=meta)
-    name = session.get_inputs()[0].name
+    inputs, outputs = session.get_inputs(), session.get_outputs()
+    if len(inputs) != 1 or len(outputs) < 1:
+        raise ValueError(
+            f"policy file {str(path)!r} has {len(inputs)} inputs and {len(outputs)} outputs: a policy has one input "
+            "(a batch of observations) and its first output is the logits"
+        )
+    from ..policyfile import observation_shape
+
+    try:
+        shape = observation_shape({**obs, **rules})
+    except ValueError as e:
+        raise ValueError(f"policy file {str(path)!r}: its observation options cannot be played ({e})") from None
+    declared = list(inputs[0].shape or [])[1:]
+    if len(declared) != len(shape) or any(isinstance(d, int) and d != s for d, s in zip(declared, shape)):
+        raise ValueError(
+            f"policy file {str(path)!r} takes observations of shape {tuple(declared)}, but its options give "
+            f"{shape} ({', '.join(f'{k}={v!r}' for k, v in obs.items())}): give the options it was trained with"
+        )
+    name = inputs[0].name
     gen = np.random.default_rng(run)
 
     def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
-        logits = session.run(None, {name: batch})[0]
+        try:
+            logits = np.asarray(session.run(None, {name: batch})[0])
+        except Exception as e:  # onnxruntime's own exception types
+            raise ValueError(f"policy file {str(path)!r} cannot be run ({str(e).splitlines()[0][:200]})") from None
+        if logits.ndim != 2 or logits.shape[0] != len(batch) or logits.shape[1] < 1:
+            raise ValueError(
+                f"policy file {str(path)!r} gives outputs of shape {logits.shape} for {len(batch)} observations: a "
+                "policy gives a row of logits per observation"
+            )
         if not stochastic:
             return logits.argmax(-1)
         p = np.exp(logits - logits.max(-1, keepdims=True))
@@ -200,17 +249,40 @@ def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:
         func = module
         for part in attr.split("."):
             func = getattr(func, part)
-    except (ImportError, AttributeError) as e:
-        raise ValueError(f"policy {spec!r}: cannot import it ({e})") from None
+    except (ImportError, AttributeError, TypeError, ValueError) as e:  # TypeError, ValueError: "..", "", "a..b"
+        raise ValueError(f"policy {spec!r}: cannot import it ({e}); give pkg.mod:func") from None
     if not callable(func):
         raise ValueError(f"policy {spec!r} is not callable")
-    source = inspect.getsourcefile(module)
+    try:
+        source = inspect.getsourcefile(module)
+    except TypeError:  # a built-in module (builtins:len) has no source file
+        source = None
     info.update(kind="callable", actions="as-is", sha256=_atomic.sha256(Path(source)) if source else None)
 
     def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
-        return np.asarray(func(batch))
+        try:
+            out = func(batch)
+            actions = np.asarray(out)
+        except Exception as e:  # the callable's own failure: said in one line, naming it
+            raise ValueError(f"policy {spec!r} failed on a batch of observations ({type(e).__name__}: {e})") from None
+        numeric = np.issubdtype(actions.dtype, np.integer) or np.issubdtype(actions.dtype, np.floating)
+        if actions.shape != (len(batch),) or not numeric or not np.array_equal(actions, np.round(actions)):
+            raise ValueError(
+                f"policy {spec!r} returned {type(out).__name__} {str(out)[:60]!r}: a policy returns one action per "
+                f"observation, an array of {len(batch)} integers in 0..=4"
+            )
+        return actions
 
     return Loaded(act, {"obs_type": "features", **options}, info)
+
+
+def _observation(options: dict[str, Any]) -> dict[str, Any]:
+    """What a results file records of the observation played: its observation options, and for frames the pixel
+    layout (`look`) whether given or the default, so that two files of one model say whether they saw alike."""
+    obs = {k: list(v) if isinstance(v, tuple) else v for k, v in options.items() if k in OBS_OPTIONS}
+    if obs.get("obs_type", "features") != "features" and "look" not in obs:
+        obs["look"] = next(o["default"] for o in _core.OPTIONS if o["name"] == "look")
+    return obs
 
 
 def run(
@@ -257,9 +329,7 @@ def run(
             **loaded.info,
             **({} if name is None else {"name": name}),
             "policy_seed": policy_seed,
-            "observation": {
-                k: list(v) if isinstance(v, tuple) else v for k, v in loaded.options.items() if k in OBS_OPTIONS
-            },
+            "observation": _observation(loaded.options),
         },
         "package": {"name": "chopperscape", "version": __version__},
         "episodes": [{k: e[k] for k in ("seed", "return", "steps", "cause")} for e in episodes],

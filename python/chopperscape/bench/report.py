@@ -23,19 +23,26 @@ tasks, with a 95 % band), PNG or SVG through matplotlib's Agg backend.
 
 from __future__ import annotations
 
+import html
+import json
+import os
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from .. import MODES
+from .. import MODES, _atomic
+from .._cli import cannot
 from ..learn.stats import iqm
 from . import protocol
-from .results import load
+from .results import ResultsError, comparable, load
 
 METRICS = ("mean", "median", "iqm", "optimality_gap")
 RESAMPLES = 50_000
+#: The most bootstrap resamples a report draws (`--resamples`): each takes a float per run of a row.
+MAX_RESAMPLES = 1_000_000
 GAMMA = 1.0
 Tasks = Sequence[np.ndarray]
 
@@ -159,6 +166,16 @@ def report(
     return rows
 
 
+def cell(text: str) -> str:
+    """`text` as one Markdown table cell that the docs site (MyST) shows as that text: no line breaks or other
+    control characters (each becomes a space), HTML's `&`, `<`, `>` as entities, and the characters Markdown
+    reads (`\\`, `|`, `` ` ``, `*`, `_`, `[`, `]`) escaped with a backslash. Whatever field a label comes from
+    (a row's name, a policy's source), it cannot end the cell, add a row or reach the page as markup."""
+    text = "".join(c if c.isprintable() else " " for c in text)
+    text = html.escape(text, quote=False)
+    return re.sub(r"([\\|`*_\[\]])", r"\\\1", text)
+
+
 def markdown(rows: list[dict[str, Any]]) -> str:
     lines = [
         "| policy | modes (runs) | mean return per mode | mean | median | IQM | optimality gap |",
@@ -168,7 +185,7 @@ def markdown(rows: list[dict[str, Any]]) -> str:
         cells = [f"{a['point']:.4f} [{a['low']:.4f}, {a['high']:.4f}]" for a in (r["aggregates"][m] for m in METRICS)]
         modes = ", ".join(f"{m} ({r['runs'][m]})" for m in r["modes"])
         rets = ", ".join(f"{r['mean_return'][m]:,}" for m in r["modes"])
-        lines.append(f"| {r['policy']} | {modes} | {rets} | " + " | ".join(cells) + " |")
+        lines.append(f"| {cell(r['policy'])} | {modes} | {rets} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -181,8 +198,9 @@ def plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
-    labels = [r["policy"] for r in rows]
+    with cannot(f"make the plots folder {out}"):
+        out.mkdir(parents=True, exist_ok=True)
+    labels = [plot_label(r["policy"]) for r in rows]
     fig, axes = plt.subplots(1, len(METRICS), figsize=(3.2 * len(METRICS), 0.6 * len(rows) + 1.4), sharey=True)
     for ax, name in zip(axes, METRICS):
         for i, r in enumerate(rows):
@@ -197,26 +215,68 @@ def plot(
     axes[0].invert_yaxis()
     fig.tight_layout()
     paths = [out / f"intervals.{fmt}", out / f"profile.{fmt}"]
-    fig.savefig(paths[0])
+    _save(fig, paths[0], fmt)
     plt.close(fig)
     grouped = group(docs, pool_modes)
     taus = np.linspace(0, 1, 201)
     fig, ax = plt.subplots(figsize=(6, 4))
+    lines = []
     for i, r in enumerate(rows):
         tasks = [np.array(grouped[r["policy"]][m]) for m in r["modes"]]
         lo, hi = profile_band(tasks, taus)
-        ax.plot(taus, performance_profile(tasks, taus), color=f"C{i}", label=r["policy"])
+        lines += ax.plot(taus, performance_profile(tasks, taus), color=f"C{i}")
         ax.fill_between(taus, lo, hi, color=f"C{i}", alpha=0.2)
     ax.set_xlabel("normalised score τ")
     ax.set_ylabel("fraction of runs with score > τ")
-    ax.legend(fontsize=8)
+    # Handles and labels given: every row is in the legend (matplotlib leaves out labels starting with "_").
+    ax.legend(lines, labels, fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(paths[1])
+    _save(fig, paths[1], fmt)
     plt.close(fig)
     return paths
 
 
+def plot_label(text: str) -> str:
+    """A row's label as matplotlib draws it literally: `$` escaped (no mathtext), no control characters."""
+    return "".join(c if c.isprintable() else " " for c in text).replace("$", r"\$")
+
+
+def _save(fig: Any, path: Path, fmt: str) -> None:
+    """`fig` written to `path` whole or not at all (:mod:`chopperscape._atomic`): a full disk leaves the old
+    picture; `OSError` naming the file."""
+    with cannot(f"write {path}"), _atomic.replacing(path) as tmp:
+        fig.savefig(tmp, format=fmt)
+
+
+def _run_key(doc: dict[str, Any]) -> str:
+    """What makes two results files one run: everything but `meta` and the policy seed (which a deterministic
+    policy ignores: its files for every policy seed are the same run)."""
+    same = comparable(doc)
+    same["policy"] = {k: v for k, v in same["policy"].items() if k != "policy_seed"}
+    return json.dumps(same, sort_keys=True)
+
+
 def load_all(paths: Sequence[str]) -> list[dict[str, Any]]:
-    """Every results file, checked (`ResultsError` naming the first bad one)."""
-    return [load(p) for p in paths]
+    """Every results file, checked (`ResultsError` naming the first bad one). A run is counted once: a file given
+    twice (by any path), a copy of another, or a deterministic policy's file for another policy seed (the same
+    episodes) is refused with both names."""
+    docs: list[dict[str, Any]] = []
+    seen: dict[str, str] = {}
+    files: list[tuple[str, os.stat_result]] = []
+    for p in paths:
+        doc = load(p)
+        st = os.stat(p)
+        for other, ost in files:
+            if (st.st_dev, st.st_ino) == (ost.st_dev, ost.st_ino):
+                raise ResultsError(f"results file {str(p)!r} is given twice (as {other!r}): give each run once")
+        files.append((str(p), st))
+        key = _run_key(doc)
+        if key in seen:
+            raise ResultsError(
+                f"results file {str(p)!r} is the same run as {seen[key]!r} (the same policy and episodes): a run "
+                "counts once, and a deterministic policy's files for every policy seed are one run; give one of them"
+            )
+        seen[key] = str(p)
+        docs.append(doc)
+    return docs

@@ -33,6 +33,10 @@ CAUSES = ("bird", "fuel", "truncated")
 ACTIONS = ("greedy", "sampled", "as-is")
 #: The longest row name (`policy.name`, `bench evaluate --name`).
 MAX_NAME = 80
+#: The lowest return an episode can have: a bird on its first step (docs/SPEC.md: -10, and the episode ends).
+MIN_RETURN = -10
+#: The largest results file read: 1 MiB (one is about 10 KiB: 100 episodes), checked before it is read.
+MAX_RESULTS_BYTES = 1 << 20
 
 
 class ResultsError(ValueError):
@@ -75,6 +79,12 @@ def check_name(name: Any) -> str:
 def _need(cond: bool, what: str) -> None:
     if not cond:
         raise ResultsError(what)
+
+
+def _short(n: int) -> str:
+    """An integer for a message: its digits, or for a long one its first digits and how many there are."""
+    text = str(n)
+    return text if len(text) <= 24 else f"{text[:12]}… ({len(text.lstrip('-'))} digits)"
 
 
 def _int(v: Any) -> bool:
@@ -126,6 +136,7 @@ def check(doc: Any) -> dict[str, Any]:
         isinstance(eps, list) and len(eps) == protocol.EVAL_EPISODES,
         f"`episodes` must hold {protocol.EVAL_EPISODES} episodes",
     )
+    skip = protocol.max_return(known["name"]) // protocol.MAX_EPISODE_STEPS  # the mode's frame skip
     for k, (ep, seed) in enumerate(zip(eps, protocol.eval_seeds())):
         _need(
             isinstance(ep, dict) and set(ep) == {"seed", "return", "steps", "cause"},
@@ -134,26 +145,81 @@ def check(doc: Any) -> dict[str, Any]:
         _need(ep["seed"] == seed, f"`episodes[{k}].seed` is {ep['seed']!r}, the protocol's is {seed}")
         _need(_int(ep["return"]) and _int(ep["steps"]), f"`episodes[{k}]`: return and steps must be ints")
         _need(1 <= ep["steps"] <= protocol.MAX_EPISODE_STEPS, f"`episodes[{k}].steps` out of 1..=10000")
+        _need(
+            MIN_RETURN <= ep["return"] <= ep["steps"] * skip,
+            f"`episodes[{k}].return` {_short(ep['return'])} is out of {MIN_RETURN}..={ep['steps'] * skip}: at most "
+            f"+1 per underlying step ({ep['steps']} steps at frame skip {skip}), and -10 once for a bird",
+        )
         _need(ep["cause"] in CAUSES, f"`episodes[{k}].cause` must be one of {', '.join(CAUSES)}")
+        _need(
+            ep["cause"] != "truncated" or ep["steps"] == protocol.MAX_EPISODE_STEPS,
+            f"`episodes[{k}]` is truncated at step {ep['steps']}: the protocol truncates only at its step limit, "
+            f"{protocol.MAX_EPISODE_STEPS}",
+        )
     _need(doc["summary"] == summary(eps, mode["name"]), "`summary` does not match `episodes`")
     return doc
 
 
 def load(path: str | os.PathLike) -> dict[str, Any]:
-    """Reads and checks a results file; `ResultsError` whose message is `results file NAME: what is wrong`."""
+    """Reads and checks a results file; `ResultsError` whose message is `results file NAME: what is wrong`. Only a
+    regular file of at most `MAX_RESULTS_BYTES` is read (a pipe, a device or a larger file is refused before
+    anything is read)."""
+    from .._checks import regular_file
+
     name = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        regular_file(path, f"results file {name!r}", MAX_RESULTS_BYTES)
+    except ValueError as e:
+        raise ResultsError(str(e)) from None
+    try:
+        with open(path, "rb") as f:
+            data = f.read(MAX_RESULTS_BYTES + 1)
+        if len(data) > MAX_RESULTS_BYTES:
+            raise ResultsError(f"results file {name!r} is more than the {MAX_RESULTS_BYTES:,} bytes allowed")
+        text = data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise ResultsError(f"results file {name!r}: cannot read it ({e})") from None
     try:
         doc = json.loads(text)
+    except RecursionError:
+        raise ResultsError(f"results file {name!r}: not JSON a results file can be (nested too deeply)") from None
     except ValueError as e:
         raise ResultsError(f"results file {name!r}: not JSON ({e})") from None
     try:
         return check(doc)
     except ResultsError as e:
         raise ResultsError(f"results file {name!r}: {e}") from None
+    except (OverflowError, RecursionError, TypeError) as e:  # numbers or structures no results file holds
+        raise ResultsError(f"results file {name!r}: not a results file ({type(e).__name__}: {e})") from None
+
+
+def check_out(out: str | os.PathLike, *inputs: str | os.PathLike) -> None:
+    """`ValueError` for an `--out` that a results file must not replace: a folder, a device (`/dev/null`), a pipe or
+    a socket (replacing one would swap it for a regular file, and leave a FIFO's reader waiting), or one of the
+    command's `inputs` (the policy file, by any path). Checked before any work; nothing is written."""
+    import stat
+
+    try:
+        st = os.stat(out)
+    except FileNotFoundError:
+        return
+    except OSError as e:
+        raise ValueError(f"--out {str(out)!r}: cannot use it ({e.strerror or e})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ValueError(f"--out {str(out)!r} is a folder: give a file name for the results file")
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else "a pipe or a socket"
+        raise ValueError(
+            f"--out {str(out)!r} is {kind}, not a regular file: a results file replaces a regular file only (leave "
+            "--out out to print the results to standard output)"
+        )
+    for given in inputs:
+        try:
+            same = os.path.samefile(out, given)
+        except OSError:
+            continue
+        if same:
+            raise ValueError(f"--out {str(out)!r} is the input {str(given)!r}: write the results to another file")
 
 
 def comparable(doc: dict[str, Any]) -> dict[str, Any]:

@@ -291,13 +291,45 @@ def policy_space(space: gym.Space) -> gym.Space:
     return space
 
 
+#: The largest `data` member (the settings, JSON) of an SB3 model file read: 16 MiB (SB3 writes tens of KiB).
+MAX_SB3_DATA_BYTES = 16 << 20
+#: The most an SB3 model file's members may hold together, uncompressed: 1 GiB (a policy's weights and optimiser
+#: state take a few MiB to tens of MiB). Checked on the archive's directory, before any member is read.
+MAX_SB3_BYTES = 1 << 30
+#: The largest `vecnormalize.json` read: 16 MiB (a frame stack's statistics take about 1 MiB).
+MAX_NORMALIZATION_BYTES = 16 << 20
+
+
+def _check_members(z: zipfile.ZipFile, path: Path) -> None:
+    """`ValueError` for an archive whose members would inflate past the limits (`MAX_SB3_DATA_BYTES` for `data`,
+    `MAX_SB3_BYTES` together), said from its directory before anything is inflated. A member cannot inflate past
+    the size its directory declares: `zipfile` stops there (and refuses the member's checksum)."""
+    infos = z.infolist()
+    total = sum(i.file_size for i in infos)
+    data = next((i.file_size for i in infos if i.filename == "data"), 0)
+    if data > MAX_SB3_DATA_BYTES or total > MAX_SB3_BYTES:
+        raise ValueError(
+            f"{path}: its members inflate to {total:,} bytes ({data:,} of settings), more than the "
+            f"{MAX_SB3_BYTES:,} ({MAX_SB3_DATA_BYTES:,}) a Stable-Baselines3 model file may hold"
+        )
+
+
 def _model_data(path: Path) -> dict[str, Any]:
-    """The readable settings (`data`, JSON) of an SB3 model file; `ValueError` for a file that is not one."""
+    """The readable settings (`data`, JSON) of an SB3 model file; `ValueError` for a file that is not one, or whose
+    members inflate past the limits (`_check_members`)."""
+    not_one = f"{path} is not a Stable-Baselines3 model (a zip with its `data` settings)"
     try:
-        with zipfile.ZipFile(path) as z:
+        z = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as e:
+        raise ValueError(f"{not_one}: {e}") from None
+    with z:
+        _check_members(z, path)
+        try:
             data = json.loads(z.read("data"))
-    except (zipfile.BadZipFile, KeyError, ValueError, OSError) as e:
-        raise ValueError(f"{path} is not a Stable-Baselines3 model (a zip with its `data` settings): {e}") from None
+        except RecursionError:
+            raise ValueError(f"{path} is not a Stable-Baselines3 model: its `data` is nested too deeply") from None
+        except (zipfile.BadZipFile, KeyError, ValueError, OSError, EOFError) as e:
+            raise ValueError(f"{not_one}: {e}") from None
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a Stable-Baselines3 model: its `data` is not a JSON object")
     return data
@@ -399,6 +431,9 @@ def load_normalization(
     folder = Path(folder)
     data, pkl = folder / "vecnormalize.json", folder / "vecnormalize.pkl"
     if data.is_file():
+        from .._checks import regular_file
+
+        regular_file(data, str(data), MAX_NORMALIZATION_BYTES)
         try:
             doc = json.loads(data.read_text())
             ok = isinstance(doc, dict) and doc.get("format") == NORMALIZATION_FORMAT
@@ -406,6 +441,8 @@ def load_normalization(
             clip, eps, on = float(doc["clip_obs"]), float(doc["epsilon"]), doc["norm_obs"]
             ok = ok and mean.shape == var.shape and mean.ndim >= 1 and isinstance(on, bool)
             ok = ok and bool(np.isfinite(mean).all() and (var >= 0).all() and clip > 0 and eps > 0)
+        except RecursionError:
+            raise ValueError(f"{data} is not a usable normalisation file: it is nested too deeply") from None
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ValueError(f"{data} is not a usable normalisation file: {e}") from None
         if not ok:

@@ -8,6 +8,7 @@ data), and the pickled parts of an SB3 `.zip` are replaced by what the env gives
 from __future__ import annotations
 
 import importlib.util
+import pickle
 from pathlib import Path
 from typing import Any
 
@@ -125,12 +126,15 @@ def load_sb3(
         raise ValueError(f"{what} is a DQN: its policy is greedy (argmax of Q), it cannot sample (drop --stochastic)")
     cls = getattr(stable_baselines3, algorithm)
     if trust_pickle:
-        model = cls.load(path, device="cpu")
+        try:
+            model = cls.load(path, device="cpu")
+        except pickle.UnpicklingError as e:  # its weights (`policy.pth`) are read with weights_only=True anyway
+            raise ValueError(f"{what}: its weights are not tensors and plain data ({str(e).splitlines()[0]})") from None
     else:
         custom = sb3.safe_load_objects(path, env_options)
         try:
             model = cls.load(path, device="cpu", custom_objects=custom)
-        except (RuntimeError, KeyError, TypeError, AttributeError) as e:
+        except (RuntimeError, KeyError, TypeError, AttributeError, pickle.UnpicklingError) as e:
             raise ValueError(
                 f"{what} could not be read without unpickling ({str(e).splitlines()[0]}); pass "
                 "--trust-pickle if you trust who made it"

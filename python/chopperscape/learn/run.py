@@ -33,6 +33,7 @@ from .normalize import RewardScaler
 from .parts import Parts, parts_of
 from .recipe import RUN_FILES, Recipe, check_run_folder
 from .rollout import Episodes
+from .rundir import RunLock, remove_stale_parts
 from .state import Clock, EnvBatch, TorchRng, TrainState, read_resume
 
 #: Updates between checkpoints (`model.pt` and `resume.pt`).
@@ -117,16 +118,20 @@ class Run(contextlib.AbstractContextManager["Run"]):
     def __init__(self, recipe: Recipe, out: Path, force: bool = False, resume: bool = False):
         self.recipe, self.out = recipe, Path(out)
         self.model_path = self.out / "model.pt"
-        saved = read_resume(self.out / "resume.pt", recipe) if resume else None
-        if not resume:
-            check_run_folder(self.out, force)
-        teacher = None
-        if recipe.teacher:
-            from .guidance import load_teacher
-
-            teacher = load_teacher(recipe)
         self._closing = contextlib.ExitStack()
         try:
+            # The folder is this process's for the run's life (a second writer is refused by name), and what a
+            # killed run left half-written goes before anything is read or written.
+            self._closing.enter_context(RunLock(self.out))
+            saved = read_resume(self.out / "resume.pt", recipe) if resume else None
+            if not resume:
+                check_run_folder(self.out, force)
+            teacher = None
+            if recipe.teacher:
+                from .guidance import load_teacher
+
+                teacher = load_teacher(recipe)
+            remove_stale_parts(self.out)
             self.state, self.parts = self._build(recipe, teacher, saved)
             if resume:
                 self.writer, aside = progress.Writer.resume(self.out / "progress.csv", self.state.env_steps), None

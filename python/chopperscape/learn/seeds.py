@@ -74,6 +74,21 @@ def parse_seeds(text: str) -> list[int]:
     return list(seeds)
 
 
+def check_held_out(seeds: list[int], num_envs: int, eval_seed: int, eval_episodes: int) -> None:
+    """`ValueError` when a seed's training would play the held-out evaluation seeds: seed `K` trains on reset seeds
+    `K … K + num_envs − 1` (`train --seed K`), which must miss `eval_seed … eval_seed + eval_episodes − 1` (as
+    `bench evaluate` refuses a model that reaches its evaluation seeds)."""
+    lo, hi = eval_seed, eval_seed + eval_episodes  # [lo, hi)
+    for first in seeds:
+        k = first
+        if first < hi and lo < first + num_envs:
+            raise ValueError(
+                f"--seeds: seed {k} trains on reset seeds {first}..{first + num_envs - 1}, which overlap the held-out "
+                f"evaluation seeds {lo}..{hi - 1} (--eval-seed {eval_seed}, --eval-episodes {eval_episodes}): train "
+                "on other seeds or evaluate on others"
+            )
+
+
 def _run(what: str, cmd: list[str], log: Path) -> None:
     with open(log, "w") as f:
         done = subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT)
@@ -219,6 +234,10 @@ def main(argv: list[str] | None = None) -> int:
         first += ["--steps", str(a.steps)]
     _, recipe = flags.parse([*first, "--force", *forward])
     a.steps = recipe.total_steps  # the preset's budget unless --steps
+    try:  # seed K trains on reset seeds K .. K + num_envs - 1: never the held-out ones
+        check_held_out(seeds, recipe.num_envs, a.eval_seed, a.eval_episodes)
+    except ValueError as err:
+        p.error(str(err))
     # The baselines play the rules the seeds train on (a preset's frame skip included), as `evaluate` plays a model.
     a.rules = [f"{k}={json.dumps(v)}" for k, v in recipe.env_options.items() if k in RULE_OPTIONS]
     if recipe.teacher:

@@ -11,11 +11,10 @@ copied from another run is refused.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -25,14 +24,10 @@ import torch
 from .. import _atomic, _signals
 from ..vector import VectorEnv
 from .recipe import Recipe
+from .rundir import RECIPE_KEY, check_recipe_hash, recipe_hash
 
 #: The format of `OUT/resume.pt`: 2 is the state by field (1, by a fixed list of keys, is refused).
 RESUME_FORMAT = "chopperscape-ppo-resume/2"
-
-
-def recipe_sha256(recipe: Recipe) -> str:
-    """The SHA-256 of the recipe's settings as canonical JSON: which run a checkpoint belongs to."""
-    return hashlib.sha256(json.dumps(asdict(recipe), sort_keys=True).encode()).hexdigest()
 
 
 class EnvBatch:
@@ -126,7 +121,7 @@ class TrainState:
 
     def save(self, path: Path, recipe: Recipe) -> None:
         """Writes the state to `path` whole or not at all (a signal waits until it is written)."""
-        payload = {"format": RESUME_FORMAT, "recipe_sha256": recipe_sha256(recipe), "state": self.state_dict()}
+        payload = {"format": RESUME_FORMAT, RECIPE_KEY: recipe_hash(recipe), "state": self.state_dict()}
         with _signals.deferred(f"the resume state is saved in {path}"), _atomic.replacing(path) as tmp:
             torch.save(payload, tmp)
 
@@ -152,11 +147,9 @@ def read_resume(path: Path, recipe: Recipe) -> dict[str, Any]:
     payload = read_checkpoint(path, what)
     if not isinstance(payload, dict) or payload.get("format") != RESUME_FORMAT or "state" not in payload:
         raise ValueError(f"{what} is not a resume state of this trainer (format {RESUME_FORMAT})")
-    if payload.get("recipe_sha256") != recipe_sha256(recipe):
-        raise ValueError(
-            f"{what} belongs to another run: its recipe is not this folder's recipe.json (copy a run's folder whole, "
-            "or start a new run)"
-        )
+    if payload.get(RECIPE_KEY) is None:
+        raise ValueError(f"{what} records no recipe: it is not a resume state of this trainer (format {RESUME_FORMAT})")
+    check_recipe_hash(payload, recipe, path.parent)
     return payload["state"]
 
 
