@@ -30,7 +30,6 @@ import numpy as np
 
 from .. import _atomic
 from .._cli import print_line, run_command
-from .sb3 import ChopperScapeVecEnv, save_normalization
 
 #: The format of `OUT/trainer.json`.
 RECORD = "chopperscape-trainer/1"
@@ -172,7 +171,9 @@ def progress_callback(path: Path, minutes: float | None, every: int = 0) -> Any:
     return ProgressCsv()
 
 
-def _env(settings: Mapping[str, Any], seed: int, mode: str | None) -> ChopperScapeVecEnv:
+def _env(settings: Mapping[str, Any], seed: int, mode: str | None) -> Any:
+    from .sb3 import ChopperScapeVecEnv
+
     options = dict(settings["env_options"])
     if mode is not None:
         options["mode"] = mode
@@ -200,6 +201,8 @@ def train(
     from stable_baselines3 import DQN, PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from .sb3 import save_normalization
+
     s = settings_of(algo, settings or {})
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise ValueError(f"--steps {steps!r}: at least 1")
@@ -209,7 +212,9 @@ def train(
     if s["normalize"]:
         env = VecNormalize(venv, gamma=s["gamma"], norm_reward=algo == "ppo")
     kwargs = {k: v for k, v in s.items() if k not in _ADAPTER}
-    policy_kwargs = {} if s["net_arch"] is None else {"policy_kwargs": {"net_arch": list(s["net_arch"])}}
+    policy_kwargs: dict[str, Any] = (
+        {} if s["net_arch"] is None else {"policy_kwargs": {"net_arch": list(s["net_arch"])}}
+    )
     if algo == "ppo":
         kwargs["learning_rate"] = _schedule(s["learning_rate"], s["lr_floor"])
         if s["clip_anneal"]:
