@@ -33,7 +33,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import _atomic, modes
+from .. import __version__, _atomic, modes
 from ..policies import NAMES, VectorPolicy
 from ..policyfile import TRAIN_SEEDS
 from ..vector import VectorEnv
@@ -272,13 +272,14 @@ def run(
                 k: list(v) if isinstance(v, tuple) else v for k, v in loaded.options.items() if k in OBS_OPTIONS
             },
         },
-        "package": record.package(),
+        "package": {"name": "chopperscape", "version": __version__},
         "episodes": [{k: e[k] for k in ("seed", "return", "steps", "cause")} for e in episodes],
         "summary": results.summary(episodes, mode),
         "meta": {
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "python": platform.python_version(),
             "platform": sys.platform,
+            **record.commit(),
             **({} if command is None else {"command": list(command)}),
         },
     }

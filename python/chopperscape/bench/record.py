@@ -1,9 +1,10 @@
 """How a results file was made: the fields a results file may carry beyond :mod:`.results`' first schema, each
 optional (files written before them load and report as they did), each checked when present (:func:`check`).
 
-- `package.commit`: the project's commit, `git rev-parse HEAD` of the checkout the package runs from, with
-  `package.modified` true when tracked files differ from it; the package version (`package.version`) when the
-  package does not run from a checkout (:func:`commit`).
+- `meta.commit`: the project's commit, `git rev-parse HEAD` of the checkout the package runs from, with
+  `meta.modified` true when tracked files differ from it; the package version (`package.version`) when the
+  package does not run from a checkout (:func:`project_commit`). In `meta`, as it differs between two evaluations
+  of one policy (:func:`.results.comparable` leaves it out).
 - `meta.command`: the exact command that wrote the file, as a list of arguments (`bench evaluate`'s own).
 - `training`: a trained row's training record (:data:`TRAINING`), made by `python -m chopperscape.bench row`:
 
@@ -63,13 +64,10 @@ def project_commit() -> tuple[str, bool | None]:
     return __version__, None
 
 
-def package() -> dict[str, Any]:
-    """A results file's `package`: name, version, commit (and `modified` in a checkout)."""
+def commit() -> dict[str, Any]:
+    """A results file's `meta.commit` (and `meta.modified` in a checkout)."""
     sha, modified = project_commit()
-    out: dict[str, Any] = {"name": "chopperscape", "version": __version__, "commit": sha}
-    if modified is not None:
-        out["modified"] = modified
-    return out
+    return {"commit": sha} if modified is None else {"commit": sha, "modified": modified}
 
 
 def _int(v: Any) -> bool:
@@ -119,16 +117,15 @@ def check_training(t: Any, mode: str | None = None) -> dict[str, Any]:
 def check(doc: dict[str, Any]) -> None:
     """Checks the optional fields of a results document (the module's docs); `ValueError` naming the first that
     is not as described. A document without them passes."""
-    pkg = doc["package"]
-    if "commit" in pkg:
-        c = pkg["commit"]
-        ok = isinstance(c, str) and (re.fullmatch(r"[0-9a-f]{40}", c) is not None or c == pkg.get("version"))
-        if not ok:
-            raise ValueError("`package.commit` must be 40 hex digits or the package's version")
-    if "modified" in pkg and not isinstance(pkg["modified"], bool):
-        raise ValueError("`package.modified` must be true or false")
     meta = doc.get("meta")
-    if isinstance(meta, dict) and "command" in meta and not _strings(meta["command"]):
+    meta = meta if isinstance(meta, dict) else {}
+    if "commit" in meta:
+        c, version = meta["commit"], doc["package"].get("version")
+        if not (isinstance(c, str) and (re.fullmatch(r"[0-9a-f]{40}", c) is not None or c == version)):
+            raise ValueError("`meta.commit` must be 40 hex digits or the package's version")
+    if "modified" in meta and not isinstance(meta["modified"], bool):
+        raise ValueError("`meta.modified` must be true or false")
+    if "command" in meta and not _strings(meta["command"]):
         raise ValueError("`meta.command` must be a non-empty list of strings")
     if "training" in doc:
         check_training(doc["training"], doc["mode"]["name"])

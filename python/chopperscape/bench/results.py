@@ -10,7 +10,7 @@ A results file is JSON, `"format": "chopperscape-bench/results/1"`:
                  "score"},
      "meta": {"created", "python", "platform"}}
 
-Optional fields on how a file was made (`package.commit`, `meta.command`, `training`) are :mod:`.record`'s.
+Optional fields on how a file was made (`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
 `meta` is the only part that differs between two evaluations of the same policy: everything else is a function of
 the policy, the mode and the protocol (:func:`comparable`). A file is written whole or not at all
 (:func:`write_atomic`), and read back only if every field checks (:func:`load`): a damaged file is refused with

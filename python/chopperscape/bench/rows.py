@@ -292,7 +292,7 @@ def main(a: argparse.Namespace) -> int:
             lock = _lock(runs / f"seed-{seed}.lock")
             if lock is None:
                 print_line(
-                    f"seed {seed} is being trained by another process (it holds {runs}/seed-{seed}.lock): skipped"
+                    f"seed {seed} is being trained by another process (its lock {runs}/seed-{seed}.lock): skipped"
                 )
                 continue
             if results.exists():  # finished by another process meanwhile
