@@ -561,3 +561,20 @@ def test_the_modes_tables_of_the_docs_are_the_cores(page):
         options = line.split("|")[3]
         listed = [o.strip(" `") for o in options.split(",")] if m["options"] else []
         assert listed == [f"{k}={v}" for k, v in m["options"].items()] or (not listed and "(none)" in options)
+
+
+def test_a_rows_training_record_is_what_its_trainer_wrote(tmp_path):
+    """`bench row` reads each trainer's own account: SB3's `trainer.json`, RLlib's `--summary` (its runners' seed
+    ranges, as RLlib seeded them), the recipe of `chopperscape.learn.train`."""
+    from chopperscape.bench import record, rows
+
+    made = {"settings": {"lr": 1}, "train_seeds": [[4 * 2**20, 128]], "env_steps": 99}
+    (tmp_path / "summary.json").write_text(json.dumps(made))
+    (tmp_path / "trainer.json").write_text(json.dumps({**made, "train_seeds": [[4, 1]]}))
+    for key, seeds in (("rllib-ppo", [[4 * 2**20, 128]]), ("sb3-dqn", [[4, 1]])):
+        t = rows.training_record(rows.ROWS[key], "full-v0", 3, 500, tmp_path, ["rpy", "-m", "x"])
+        assert (t["train_seeds"], t["settings"], t["env_steps"], t["steps"]) == (seeds, {"lr": 1}, 99, 500)
+        assert (t["row"], t["trainer"], t["commit"]) == (key, key, record.project_commit()[0])
+    (tmp_path / "summary.json").write_text(json.dumps({**made, "train_seeds": [[999_990, 64]]}))
+    with pytest.raises(ValueError, match="overlap the evaluation seeds"):
+        rows.training_record(rows.ROWS["rllib-ppo"], "full-v0", 3, 500, tmp_path, ["rpy"])
