@@ -11,7 +11,9 @@ left as they are: Q-learning's targets need the true scale). Frame skip 4 unless
 with frame skip 1 is refused: one decision a frame would need four times the budget). The model is saved as
 ``OUT/model.zip`` with the normalisation as data in ``OUT/vecnormalize.json``, which ``python -m
 chopperscape.learn.evaluate OUT/model.zip`` and ``python -m chopperscape.bench evaluate OUT/model.zip --option
-obs_type='"features"'`` read without unpickling; ``--steps`` is the budget every schedule follows.
+obs_type='"features"'`` read without unpickling; ``--steps`` is the budget every schedule follows. The trainer is
+``chopperscape.integrations.sb3_train`` (its settings: ``DQN_DEFAULTS``; ``OUT/trainer.json`` records them and the
+training seeds).
 """
 
 from __future__ import annotations
@@ -19,13 +21,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import torch
-from sb3_ppo import ProgressCsv
-from stable_baselines3 import DQN
-from stable_baselines3.common.vec_env import VecNormalize
-
 from chopperscape import MODES
-from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
+from chopperscape.integrations.sb3_train import train
 
 
 def main() -> None:
@@ -38,27 +35,10 @@ def main() -> None:
     a = p.parse_args()
     if a.steps < 1:
         p.error(f"--steps {a.steps}: at least 1")
-    torch.set_num_threads(a.torch_threads)
-    rules = {} if a.mode is None else {"mode": a.mode}
     try:
-        venv = ChopperScapeVecEnv(1, seed=a.seed, obs_type="features", frame_skip=4, **rules)
+        train("dqn", a.out, seed=a.seed, steps=a.steps, mode=a.mode, torch_threads=a.torch_threads)
     except ValueError as e:  # a mode whose frame skip is not 4
         p.error(f"--mode {a.mode}: {e}")
-    env = VecNormalize(venv, norm_reward=False, gamma=0.998)
-    model = DQN(
-        "MlpPolicy",
-        env,
-        gamma=0.998,
-        buffer_size=100_000,
-        learning_starts=10_000,
-        policy_kwargs={"net_arch": [128, 128]},
-        seed=a.seed,
-        device="cpu",
-    )
-    a.out.mkdir(parents=True, exist_ok=True)
-    model.learn(a.steps, callback=ProgressCsv(a.out / "progress.csv", None, every=10_000))
-    model.save(a.out / "model.zip", exclude=["replay_buffer"])
-    save_normalization(env, a.out / "vecnormalize.json")
 
 
 if __name__ == "__main__":

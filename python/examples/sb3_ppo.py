@@ -20,64 +20,37 @@ The model is saved as ``OUT/model.zip`` (and, with
 ``--tuned``, the normalisation statistics as data in ``OUT/vecnormalize.json``, which
 ``python -m chopperscape.learn.evaluate OUT/model.zip`` reads, and as SB3's pickle in ``OUT/vecnormalize.pkl``, to go on
 training with ``VecNormalize.load``); ``progress.csv`` has the return columns of
-:mod:`chopperscape.learn.progress`, drawn by ``python -m chopperscape.learn.plot``.
+:mod:`chopperscape.learn.progress`, drawn by ``python -m chopperscape.learn.plot``. The trainer is
+``chopperscape.integrations.sb3_train`` (``OUT/trainer.json`` records its full settings and the training seeds).
 """
 
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
-
-import numpy as np
-import torch
-from stable_baselines3 import PPO
-from stable_baselines3.common.callbacks import BaseCallback
-from stable_baselines3.common.vec_env import VecNormalize
+from typing import Any
 
 from chopperscape import MODES
-from chopperscape.integrations.sb3 import ChopperScapeVecEnv, ppo_settings, save_normalization
-from chopperscape.learn import progress
+from chopperscape.integrations.sb3_train import recipe_settings, train
 from chopperscape.learn.recipe import LR_FLOOR, PRESETS, Recipe
 
 
-class ProgressCsv(BaseCallback):
-    """Writes one CSV row per rollout (last 100 episodes), at most one every `every` env steps (DQN's rollouts are
-    4 steps long), and stops at the time budget."""
-
-    def __init__(self, path: Path, minutes: float | None, every: int = 0):
-        super().__init__()
-        self.path, self.deadline = path, float("inf") if minutes is None else minutes * 60
-        self.start = time.monotonic()
-        self.episodes = 0
-        self.every, self.last = every, -every
-
-    def _on_training_start(self) -> None:
-        self.writer = progress.Writer(self.path, progress.RETURNS)
-
-    def _on_step(self) -> bool:
-        self.episodes += sum("episode" in i for i in self.locals["infos"])
-        return time.monotonic() - self.start < self.deadline
-
-    def _on_rollout_end(self) -> None:
-        eps = list(self.model.ep_info_buffer or [])
-        if eps and self.num_timesteps - self.last >= self.every:
-            self.last = self.num_timesteps
-            r = np.array([e["r"] for e in eps])
-            length = np.array([e["l"] for e in eps])
-            self.writer.row(
-                {
-                    "env_steps": self.num_timesteps,
-                    "wall_s": f"{time.monotonic() - self.start:.1f}",
-                    "episodes": self.episodes,
-                    "mean_return": f"{r.mean():.1f}",
-                    "std_return": f"{r.std():.1f}",
-                    "mean_length": f"{length.mean():.1f}",
-                }
-            )
-
-    def _on_training_end(self) -> None:
-        self.writer.close()
+def pixel_settings(size: int) -> dict[str, Any]:
+    """RL Zoo's Atari PPO on SIZE x SIZE grayscale frames, 4 stacked, frame skip 4 (the module's docs)."""
+    return {
+        "policy": "CnnPolicy",
+        "num_envs": 8,
+        "env_options": {"obs_type": "grayscale", "obs_size": [size, size], "frame_stack": 4, "frame_skip": 4},
+        "n_steps": 128,
+        "n_epochs": 4,
+        "batch_size": 256,
+        "learning_rate": 2.5e-4,
+        "lr_floor": 0.0,
+        "clip_range": 0.1,
+        "clip_anneal": True,
+        "ent_coef": 0.01,
+        "vf_coef": 0.5,
+    }
 
 
 def main() -> None:
@@ -110,57 +83,31 @@ def main() -> None:
         a.steps = PRESETS[preset].get("total_steps")
     if a.steps is None and a.minutes is None:
         a.minutes = 30.0
-    steps = a.steps or 10**10
-    torch.set_num_threads(a.torch_threads)
-    rules = {} if a.mode is None else {"mode": a.mode}
     if preset is not None and a.pixels is not None:
         p.error("--tuned and --preset are the features recipe's settings; --pixels has RL Zoo's Atari settings")
     if a.pixels is not None and not 36 <= a.pixels <= 600:
         p.error(f"--pixels {a.pixels}: the Nature CNN needs frames of 36 to 600 pixels a side")
+    settings: dict[str, Any] = {}
     if a.pixels is not None:
-        frames = {"obs_size": [a.pixels, a.pixels], "frame_stack": 4, "frame_skip": 4}
-        try:
-            env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="grayscale", **frames, **rules)
-        except ValueError as e:  # a mode whose frame skip is not 4
-            p.error(f"--pixels: {e}")
-        model = PPO(
-            "CnnPolicy",
-            env,
-            n_steps=128,
-            n_epochs=4,
-            batch_size=256,
-            learning_rate=lambda remaining: 2.5e-4 * remaining,
-            clip_range=lambda remaining: 0.1 * remaining,
-            ent_coef=0.01,
-            vf_coef=0.5,
-            seed=a.seed,
-            device="cpu",
-        )
+        settings, flag = pixel_settings(a.pixels), "--pixels"
     elif preset is not None:
-        r = Recipe(**{k: v for k, v in PRESETS[preset].items() if k != "total_steps"})
-        try:
-            venv = ChopperScapeVecEnv(r.num_envs, seed=a.seed, obs_type="features", **r.env_options, **rules)
-        except ValueError as e:  # a mode whose frame skip is not the preset's
-            p.error(f"--preset {preset}: {e}")
-        env = VecNormalize(venv, gamma=r.gamma)
-        lr = r.learning_rate
-        model = PPO(
-            "MlpPolicy",
-            env,
-            learning_rate=lambda remaining: lr * max(remaining, LR_FLOOR),
-            **ppo_settings(r),
-            seed=a.seed,
-            device="cpu",
-        )
+        recipe = Recipe(**{k: v for k, v in PRESETS[preset].items() if k != "total_steps"})
+        settings, flag = recipe_settings(recipe, LR_FLOOR), f"--preset {preset}"
     else:
-        env = ChopperScapeVecEnv(8, seed=a.seed, obs_type="features", **rules)
-        model = PPO("MlpPolicy", env, seed=a.seed, device="cpu")
-    a.out.mkdir(parents=True, exist_ok=True)
-    model.learn(steps, callback=ProgressCsv(a.out / "progress.csv", a.minutes))
-    model.save(a.out / "model.zip")
-    if preset is not None:
-        save_normalization(env, a.out / "vecnormalize.json")
-        env.save(str(a.out / "vecnormalize.pkl"))
+        flag = "--mode"
+    try:
+        train(
+            "ppo",
+            a.out,
+            settings,
+            seed=a.seed,
+            steps=a.steps or 10**10,
+            mode=a.mode,
+            minutes=a.minutes,
+            torch_threads=a.torch_threads,
+        )
+    except ValueError as e:  # a mode whose frame skip is not the settings'
+        p.error(f"{flag}: {e}")
 
 
 if __name__ == "__main__":

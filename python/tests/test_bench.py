@@ -339,22 +339,21 @@ def test_the_leaderboard_page_shows_the_committed_results():
         assert row in page, f"docs/site/bench.md lacks the row (regenerate it, see the page):\n{row}"
 
 
-ROWS_SH = ROOT / "docs" / "bench" / "rows.sh"
-#: The trained rows rows.sh makes, and the command that trains each (after the interpreter).
+#: The trained rows (chopperscape.bench.rows), and the command that trains each (after the interpreter).
 TRAINED_ROWS = {
     "fast": ["-m", "chopperscape.learn.train", "--preset", "fast"],
     "features": ["-m", "chopperscape.learn.train", "--mode"],
-    "sb3-ppo": ["python/examples/sb3_ppo.py", "--preset", "fast"],
-    "sb3-dqn": ["python/examples/sb3_dqn.py", "--mode"],
-    "rllib-ppo": ["python/examples/rllib_ppo.py", "--preset", "fast"],
+    "sb3-ppo": ["-m", "chopperscape.integrations.sb3_train", "ppo"],
+    "sb3-dqn": ["-m", "chopperscape.integrations.sb3_train", "dqn"],
+    "rllib-ppo": ["-m", "chopperscape.integrations.rllib.ppo"],
     "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels"],
 }
 
 
-def _rows_sh(*args: str, results: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    given = {k: v for k, v in os.environ.items() if k not in ("STEPS", "RLLIB_PYTHON")}
-    given |= {"DRY_RUN": "1", "PYTHON": "py", "RESULTS": str(results), **(env or {})}
-    return subprocess.run(["bash", str(ROWS_SH), *args], capture_output=True, text=True, env=given, cwd=ROOT)
+def _row(*args: str, results: Path, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
+    """`python -m chopperscape.bench row ARGS --results RESULTS --python py` in a subprocess."""
+    command = [sys.executable, "-m", "chopperscape.bench", "row", *args, "--results", str(results), "--python", "py"]
+    return subprocess.run(command + ["--rllib-python", "rpy"], capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
 def _commands(done: subprocess.CompletedProcess[str]) -> list[list[str]]:
@@ -362,67 +361,166 @@ def _commands(done: subprocess.CompletedProcess[str]) -> list[list[str]]:
     return [shlex.split(line) for line in done.stdout.splitlines() if not line.endswith("skipped")]
 
 
+def test_the_rows_are_the_committed_rows():
+    """Every trained row of the leaderboard is declared in the package, under the name its committed files carry."""
+    from chopperscape.bench import rows
+
+    assert set(rows.ROWS) == set(TRAINED_ROWS)
+    for f in [*RESULTS.glob("*.seed*.json"), *(ROOT / "docs" / "bench" / "in-progress").glob("*.json")]:
+        mode, key, _ = f.name.split(".", 2)
+        if key in rows.ROWS:
+            assert json.loads(f.read_text())["policy"]["name"] == rows.ROWS[key].name(), f.name
+            assert mode in rows.ROWS[key].modes
+
+
 @pytest.mark.parametrize("row", sorted(TRAINED_ROWS))
 @pytest.mark.parametrize("mode", ["sticky-v0", "full-v0"])
-def test_rows_sh_trains_each_seed_on_the_mode_and_evaluates_it_under_a_valid_row_name(row, mode, tmp_path):
-    """docs/bench/rows.sh (DRY_RUN prints its commands): each seed is trained on the mode's rules with that seed,
-    then its model evaluated on the same mode under the row's name, into MODE.ROW.seedS.json; the name is one the
-    results files accept, and a committed row of the same kind carries exactly that name."""
-    commands = _commands(_rows_sh(row, mode, "runs", "3", "7", results=tmp_path))
+def test_bench_row_trains_each_seed_on_the_mode_and_evaluates_it_under_the_rows_name(row, mode, tmp_path):
+    """`bench row --dry-run` prints its commands: each seed is trained on the mode's rules with that seed, then its
+    model evaluated on the same mode under the row's name with its training record, into MODE.ROW.seedS.json."""
+    from chopperscape.bench import rows
+
+    commands = _commands(_row(row, "--mode", mode, "--seeds", "3,7", "--runs", "runs", "--dry-run", results=tmp_path))
     evaluations = [c for c in commands if c[1:4] == ["-m", "chopperscape.bench", "evaluate"]]
-    assert len(evaluations) == 2
+    assert len(evaluations) == 2 and len(commands) == 4
     for seed, ev in zip((3, 7), evaluations):
         train = commands[commands.index(ev) - 1]
+        assert train[0] == ("rpy" if row == "rllib-ppo" else "py") and ev[0] == "py"
         assert train[1 : 1 + len(TRAINED_ROWS[row])] == TRAINED_ROWS[row]
-        assert train[train.index("--seed") + 1] == str(seed)
-        assert mode in " ".join(train)  # --mode MODE, or RLlib's env config {"mode": MODE}
+        flags = " ".join(train)
+        assert f"--seed {seed} " in flags or f"--seed={seed} " in flags
+        assert f"--mode {mode}" in flags or f'"mode": "{mode}"' in flags  # or RLlib's env config
         assert ev[ev.index("--mode") + 1] == mode
         assert ev[ev.index("--out") + 1] == str(tmp_path / f"{mode}.{row}.seed{seed}.json")
-        assert ev[4].startswith(f"runs/seed-{seed}/model.")
-        name = results.check_name(ev[ev.index("--name") + 1])
-    committed = {json.loads(f.read_text())["policy"].get("name") for f in RESULTS.glob(f"*.{row}.seed*.json")}
-    assert committed <= {name}, f"committed {row} rows are named {committed}, rows.sh names them {name!r}"
+        assert ev[ev.index("--training") + 1] == f"runs/seed-{seed}/training.json"
+        assert ev[4] == f"runs/seed-{seed}/{rows.ROWS[row].model}"
+        assert results.check_name(ev[ev.index("--name") + 1]) == rows.ROWS[row].name()
 
 
-def test_rows_sh_skips_a_seed_whose_results_exist_and_refuses_unknown_rows_and_modes(tmp_path):
+def test_bench_row_skips_finished_seeds_and_refuses_bad_input_in_one_line(tmp_path):
     (tmp_path / "sticky-v0.fast.seed1.json").write_text("{}")
-    done = _rows_sh("fast", "sticky-v0", "runs", "1", "2", results=tmp_path)
+    done = _row("fast", "--mode", "sticky-v0", "--seeds", "1-2", "--runs", "runs", "--dry-run", results=tmp_path)
     assert f"{tmp_path}/sticky-v0.fast.seed1.json exists: seed 1 skipped" in done.stdout
     assert [c[c.index("--seed") + 1] for c in _commands(done) if "--seed" in c] == ["2"]
     refused = [
-        (("ppo", "sticky-v0"), "error: unknown row 'ppo': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels"),
-        (("fast", "v0"), "error: unknown mode 'v0' for a trained row: allowed sticky-v0, full-v0"),
+        (
+            ["ppo", "--mode", "sticky-v0"],
+            "unknown row 'ppo': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels",
+        ),
+        (["fast", "--mode", "v0"], "--mode 'v0' is not a mode of row fast: allowed sticky-v0, full-v0"),
+        (["fast", "--mode", "full-v0", "--seeds", "*"], "--seeds '*': allowed numbers and ranges such as 0-9 or 0,3,5"),
+        (["fast", "--mode", "full-v0", "--seeds", "0-9,x"], "--seeds '0-9,x': allowed numbers and ranges"),
+        (["fast", "--mode", "full-v0", "--seeds", "5-2"], "--seeds '5-2': '5-2' is out of bounds; allowed numbers"),
+        (["fast", "--mode", "full-v0", "--steps", "3e6"], "--steps '3e6': allowed a whole number of decisions from 1"),
     ]
     for args, says in refused:
-        done = _rows_sh(*args, "runs", results=tmp_path)
-        assert (done.returncode, done.stdout) == (2, "") and says in done.stderr
-    # $STEPS sets a budgeted row's budget and its name with it.
-    train, ev = _commands(_rows_sh("sb3-dqn", "full-v0", "runs", "0", results=tmp_path, env={"STEPS": "250000"}))
+        done = _row(*args, "--runs", str(tmp_path / "runs"), results=tmp_path)
+        assert (done.returncode, done.stdout) == (2, "") and done.stderr.startswith(f"error: {says}")
+        assert done.stderr.count("\n") == 1, done.stderr
+    assert not (tmp_path / "runs").exists()
+    # --steps sets the budget and the row's name with it.
+    train, ev = _commands(_row("sb3-dqn", "--mode", "full-v0", "--seeds", "0", "--runs", "r", "--steps", "250000",
+                               "--dry-run", results=tmp_path))  # fmt: skip
     assert train[train.index("--steps") + 1] == "250000"
     assert ev[ev.index("--name") + 1] == "SB3 DQN, stock, 250 k decisions"
 
 
-def test_rows_sh_leaves_a_seed_another_process_claims_and_takes_over_a_stale_claim(tmp_path):
-    """Several rows.sh on one row share its seeds: a seed claimed by a live process is skipped, a claim whose
-    process is gone (a stopped run) is taken over, and a finished seed's claim is removed. (PYTHON=true: every
-    command succeeds at once and writes nothing.)"""
+def test_seeds_are_numbers_and_ranges():
+    from chopperscape.bench.rows import budget, parse_seeds
+
+    assert parse_seeds("0-9") == list(range(10)) and parse_seeds("7,0-2,2") == [0, 1, 2, 7]
+    for bad in ("", "1,", "-1", "1-", "a", "0-9 ", "1..3", "0-1000000", "0-5000"):
+        with pytest.raises(ValueError, match="allowed numbers and ranges"):
+            parse_seeds(bad)
+    assert (budget(3_000_000), budget(250_000), budget(2048)) == ("3 M", "250 k", "2,048")
+
+
+def test_bench_row_leaves_a_seed_another_process_holds(tmp_path):
+    """Several `bench row` on one row share its seeds: a seed whose lock another process holds is skipped, and
+    the lock is an advisory one (free again once its holder closes it; a stopped run leaves none held)."""
+    import fcntl
+
     runs = tmp_path / "runs"
     runs.mkdir()
-    (runs / "seed-1.claim").write_text(f"{os.getpid()}\n")  # live: this test's process
-    dead = subprocess.Popen(["true"])  # a process that has exited, for its id
-    dead.wait()
-    (runs / "seed-2.claim").write_text(f"{dead.pid}\n")
-    done = _rows_sh(
-        "fast", "sticky-v0", str(runs), "1", "2", "3", results=tmp_path, env={"DRY_RUN": "", "PYTHON": "true"}
-    )
+    (tmp_path / "sticky-v0.fast.seed2.json").write_text("{}")
+    with open(runs / "seed-1.lock", "w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        done = _row("fast", "--mode", "sticky-v0", "--seeds", "1,2", "--runs", str(runs), results=tmp_path)
     assert done.returncode == 0, done.stderr
-    assert done.stdout == f"seed 1 is being trained by process {os.getpid()}: skipped\n"
-    assert (runs / "seed-1.claim").read_text() == f"{os.getpid()}\n"
-    assert not (runs / "seed-2.claim").exists() and not (runs / "seed-3.claim").exists()
+    assert (
+        done.stdout.splitlines()[0]
+        == f"seed 1 is being trained by another process (its lock {runs}/seed-1.lock): skipped"
+    )
+    with open(runs / "seed-1.lock") as again:
+        fcntl.flock(again, fcntl.LOCK_EX | fcntl.LOCK_NB)  # free
+
+
+def test_bench_row_trains_evaluates_and_records_at_a_smoke_budget(tmp_path):
+    """The fast row for one update: trained, its training record written, evaluated by the protocol into a results
+    file that records the commit, the command, the recipe and the training seeds; run again, it is skipped, and
+    with its results gone the trained seed is evaluated again without training."""
+    from chopperscape.bench import record
+
+    runs, out = tmp_path / "runs", tmp_path / "results"
+    out.mkdir()
+    args = ["fast", "--mode", "sticky-v0", "--seeds", "4", "--runs", str(runs), "--steps", "16384"]
+    command = [sys.executable, "-m", "chopperscape.bench", "row", *args, "--results", str(out)]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr
+    doc = results.load(out / "sticky-v0.fast.seed4.json")
+    t = doc["training"]
+    assert doc["policy"]["name"] == "fast preset: PPO on features, 16,384 decisions"
+    assert t["row"] == "fast" and t["seed"] == 4 and t["train_seeds"] == [[4, 128]] == [doc["policy"]["train_seeds"]]
+    assert t["command"][1:] == ["-m", "chopperscape.learn.train", "--preset", "fast", "--mode", "sticky-v0"] + [
+        "--steps", "16384", "--seed", "4", "--out", str(runs / "seed-4"), "--force"]  # fmt: skip
+    assert t["settings"] == doc["policy"]["recipe"] and t["settings"]["num_envs"] == 128
+    assert t["commit"] == doc["meta"]["commit"] == record.project_commit()[0]
+    assert doc["meta"]["command"][3:5] == ["evaluate", str(runs / "seed-4" / "model.pt")]
+    again = subprocess.run(command, capture_output=True, text=True, timeout=900)
+    assert again.stdout == f"{out}/sticky-v0.fast.seed4.json exists: seed 4 skipped\n"
+    log = (runs / "seed-4.log").stat().st_mtime_ns
+    (out / "sticky-v0.fast.seed4.json").unlink()
+    assert subprocess.run(command, capture_output=True, text=True, timeout=900).returncode == 0
+    assert (runs / "seed-4.log").stat().st_mtime_ns == log  # not trained again
+    assert results.load(out / "sticky-v0.fast.seed4.json")["training"] == t
+
+
+def test_results_files_record_how_they_were_made_and_old_ones_still_load(tmp_path):
+    """`meta.commit`, `meta.command` and `training` (chopperscape.bench.record) are optional: a file without
+    them loads; with them, each is checked."""
+    from chopperscape.bench import record
+
+    doc = evaluate.run("heuristic", "v0")
+    assert doc["meta"]["commit"] == record.project_commit()[0] and "training" not in doc
+    old = json.loads(results.dumps(doc))
+    del old["meta"]["commit"]
+    old["meta"].pop("modified", None)
+    assert results.check(old) == old
+    training = {
+        "format": record.TRAINING, "row": "fast", "trainer": "t", "mode": "v0", "seed": 0, "command": ["py", "x"],
+        "commit": "abc", "settings": {}, "steps": 10, "env_steps": 12, "train_seeds": [[0, 2], [5, 1]],
+    }  # fmt: skip
+    with_training = evaluate.run("heuristic", "v0", training=training, command=["python", "-m", "x"])
+    assert with_training["training"] == training and with_training["meta"]["command"] == ["python", "-m", "x"]
+    assert with_training["policy"]["train_seeds"] is None  # several ranges: in `training` only
+    for broken, says in [
+        ({**training, "train_seeds": [[999_999, 2]]}, "overlap the evaluation seeds"),
+        ({**training, "mode": "full-v0"}, "`training.mode` is 'full-v0'"),
+        ({**training, "command": "py x"}, "`training.command` must be a non-empty list"),
+        ({k: v for k, v in training.items() if k != "settings"}, "`training.settings` is missing"),
+    ]:
+        bad = json.loads(results.dumps(with_training))
+        bad["training"] = broken
+        with pytest.raises(results.ResultsError, match=says):
+            results.check(bad)
+    bad = json.loads(results.dumps(doc))
+    bad["meta"]["commit"] = "HEAD"
+    with pytest.raises(results.ResultsError, match=r"meta\.commit"):
+        results.check(bad)
 
 
 def test_each_committed_trained_row_is_whole_training_seeds_0_to_9_named_alike():
-    """A trained row (`MODE.ROW.seedS.json`, made by rows.sh) is committed whole: seeds 0-9, one name, ten
+    """A trained row (`MODE.ROW.seedS.json`, made by `bench row`) is committed whole: seeds 0-9, one name, ten
     different trained policies, each file's training seeds its own (S's games for the trainer and SB3)."""
     rows: dict[tuple[str, str], dict[int, dict]] = {}
     for f in RESULTS.glob("*.seed*.json"):
@@ -440,9 +538,9 @@ def test_each_committed_trained_row_is_whole_training_seeds_0_to_9_named_alike()
                 assert p["train_seeds"][0] == seed, f"{mode}.{row}.seed{seed}: trained on {p['train_seeds']}"
 
 
-def test_the_in_progress_results_are_valid_rows_sh_runs_not_yet_on_the_leaderboard():
-    """docs/bench/in-progress/ holds the finished seeds of rows still being trained (rows.sh with RESULTS pointing
-    there): each file is a valid results file of a trained row, named as rows.sh names it, and no (mode, row) of
+def test_the_in_progress_results_are_valid_runs_of_trained_rows_not_yet_on_the_leaderboard():
+    """docs/bench/in-progress/ holds the finished seeds of rows still being trained (`bench row --results` pointing
+    there): each file is a valid results file of a trained row, named as `bench row` names it, and no (mode, row) of
     them is also on the leaderboard (a row moves there whole)."""
     files = sorted((ROOT / "docs" / "bench" / "in-progress").glob("*.json"))
     on_board = {tuple(f.name.split(".")[:2]) for f in RESULTS.glob("*.seed*.json")}
@@ -463,3 +561,20 @@ def test_the_modes_tables_of_the_docs_are_the_cores(page):
         options = line.split("|")[3]
         listed = [o.strip(" `") for o in options.split(",")] if m["options"] else []
         assert listed == [f"{k}={v}" for k, v in m["options"].items()] or (not listed and "(none)" in options)
+
+
+def test_a_rows_training_record_is_what_its_trainer_wrote(tmp_path):
+    """`bench row` reads each trainer's own account: SB3's `trainer.json`, RLlib's `--summary` (its runners' seed
+    ranges, as RLlib seeded them), the recipe of `chopperscape.learn.train`."""
+    from chopperscape.bench import record, rows
+
+    made = {"settings": {"lr": 1}, "train_seeds": [[4 * 2**20, 128]], "env_steps": 99}
+    (tmp_path / "summary.json").write_text(json.dumps(made))
+    (tmp_path / "trainer.json").write_text(json.dumps({**made, "train_seeds": [[4, 1]]}))
+    for key, seeds in (("rllib-ppo", [[4 * 2**20, 128]]), ("sb3-dqn", [[4, 1]])):
+        t = rows.training_record(rows.ROWS[key], "full-v0", 3, 500, tmp_path, ["rpy", "-m", "x"])
+        assert (t["train_seeds"], t["settings"], t["env_steps"], t["steps"]) == (seeds, {"lr": 1}, 99, 500)
+        assert (t["row"], t["trainer"], t["commit"]) == (key, key, record.project_commit()[0])
+    (tmp_path / "summary.json").write_text(json.dumps({**made, "train_seeds": [[999_990, 64]]}))
+    with pytest.raises(ValueError, match="overlap the evaluation seeds"):
+        rows.training_record(rows.ROWS["rllib-ppo"], "full-v0", 3, 500, tmp_path, ["rpy"])

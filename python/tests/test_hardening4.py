@@ -23,7 +23,6 @@ from chopperscape.bench.__main__ import main as bench
 ROOT = Path(__file__).resolve().parents[2]
 RESULTS = ROOT / "docs" / "bench" / "results"
 MODELS = ROOT / "models"
-ROWS_SH = ROOT / "docs" / "bench" / "rows.sh"
 #: A recipe that trains an update in a fraction of a second.
 SMALL = ["--num-envs", "4", "--num-steps", "16", "--hidden", "8", "--num-minibatches", "2", "--update-epochs", "1"]
 
@@ -523,30 +522,33 @@ def test_plots_draw_every_label_literally_and_in_the_legend(tmp_path, capsys):
     assert "_hidden @ v0" in profile and "PPO $\\b$ run @ v0" in profile.replace("\\$", "$")
 
 
-# --- 15. rows.sh: seeds are numbers and ranges; claims do not outlive their process -------------------------------
+# --- 15. bench row: seeds are numbers and ranges; a failed seed leaves no claim ----------------------------------
 
 
-def _rows_sh(*args: str, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
-    given = {k: v for k, v in os.environ.items() if k not in ("STEPS", "RLLIB_PYTHON", "DRY_RUN")}
-    return subprocess.run(["bash", str(ROWS_SH), *args], capture_output=True, text=True, env={**given, **env}, cwd=ROOT)
+def _row(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "chopperscape.bench", "row", *args], capture_output=True, text=True, timeout=300
+    )
 
 
-def test_rows_sh_reads_seeds_as_numbers_and_ranges_never_as_file_patterns(tmp_path):
-    env = {"DRY_RUN": "1", "PYTHON": "py", "RESULTS": str(tmp_path)}
-    for bad in ("*", "Cargo.*", "1;2", "-3", "5-3", "0-1000"):
-        done = _rows_sh("fast", "sticky-v0", "runs", bad, env=env)
+def test_bench_row_reads_seeds_as_numbers_and_ranges_never_as_file_patterns(tmp_path):
+    common = ("fast", "--mode", "sticky-v0", "--runs", str(tmp_path / "runs"), "--results", str(tmp_path))
+    for bad in ("*", "Cargo.*", "1;2", "-3", "5-3", "0-100000000"):
+        done = _row(*common, "--seeds", bad, "--dry-run")
         assert (done.returncode, done.stdout) == (2, ""), (bad, done)
-        assert len(done.stderr.strip().splitlines()) == 1 and "error: seed" in done.stderr, done.stderr
-    done = _rows_sh("fast", "sticky-v0", "runs", "2-4", "3", "0", env=env)
+        assert len(done.stderr.strip().splitlines()) == 1 and "--seeds" in done.stderr, done.stderr
+    done = _row(*common, "--seeds", "2-4,3,0", "--dry-run")
     assert done.returncode == 0, done.stderr
     seeds = [line.split("--seed ")[1].split()[0] for line in done.stdout.splitlines() if "--seed " in line]
-    assert seeds == ["2", "3", "4", "0"]
+    assert seeds == ["0", "2", "3", "4"]
+    assert not (tmp_path / "runs").exists()  # a dry run makes nothing
 
 
-def test_rows_sh_removes_its_claim_when_a_seed_fails(tmp_path):
+def test_bench_row_leaves_no_claim_when_a_seed_fails(tmp_path):
     runs = tmp_path / "runs"
-    done = _rows_sh(
-        "fast", "sticky-v0", str(runs), "1", env={"DRY_RUN": "", "PYTHON": "false", "RESULTS": str(tmp_path)}
-    )
-    assert done.returncode != 0
-    assert not list(runs.glob("*.claim")), list(runs.iterdir())
+    args = ("fast", "--mode", "sticky-v0", "--runs", str(runs), "--results", str(tmp_path), "--seeds", "1")
+    done = _row(*args, "--python", "false")
+    assert done.returncode != 0 and "failed" in done.stderr, done
+    # The seed's claim went with the process: the next run takes the seed again instead of skipping it.
+    again = _row(*args, "--python", "false")
+    assert "being trained by another process" not in again.stdout and again.returncode != 0, again

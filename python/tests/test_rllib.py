@@ -529,3 +529,28 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         {"obs_type": "features", "max_fuel": 40},
     )
     assert episodes.summary(played)["mean_return"] == evaluated["mean_return"]
+
+
+def test_the_bench_rows_rllib_flags_are_the_fast_preset_on_one_runner(tmp_path):
+    """`bench row rllib-ppo` gives the trainer module (`python -m chopperscape.integrations.rllib.ppo`, which takes
+    no --preset) explicit flags: the same settings as the example's `--preset fast --env-runners 1`; the module's
+    learning-rate floor is the recipe's."""
+    from chopperscape.bench import rows
+    from chopperscape.integrations.rllib import flags
+    from chopperscape.learn.recipe import LR_FLOOR
+
+    assert flags.LR_FLOOR == LR_FLOOR
+    spec = importlib.util.spec_from_file_location("rllib_ppo_example", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    command = rows.train_command(rows.ROWS["rllib-ppo"], "full-v0", 3, 3_000_000, tmp_path, "py", "rpy")
+    assert command[:3] == ["rpy", "-m", "chopperscape.integrations.rllib.ppo"]
+    ours = vars(flags.parse_args(command[3:]))
+    theirs = vars(example.parse_args(["--preset", "fast", "--env-runners", "1", "--seed", "3", "--steps", "3000000"]))
+    theirs["env_config"]["mode"] = "full-v0"
+    for key in ("csv", "summary", "export", "preset", "preset_env_options"):
+        ours.pop(key, None), theirs.pop(key, None)
+    assert ours == theirs
+    with pytest.raises(SystemExit):
+        flags.parse_args(["--preset", "fast"])  # the package's trainer has no presets

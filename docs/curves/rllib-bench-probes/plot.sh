@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# RLlib PPO on sticky-v0, training seed 0, 3 M decisions, the fast preset's settings (rows.sh rllib-ppo), as the
-# example changed this session, beside the features recipe's seed 0 (rows.sh features): training return (last 100
+# RLlib PPO on sticky-v0, training seed 0, 3 M decisions, the fast preset's settings (`bench row rllib-ppo`), as the
+# example changed this session, beside the features recipe's seed 0 (`bench row features`): training return (last 100
 # episodes) by decisions. From the repository root: bash docs/curves/rllib-bench-probes/plot.sh
 #   a: RLlib's clip 0.3 and adaptive KL penalty, rewards scaled by returns restarted at each 128-step chunk
 #   b: the preset's clip 0.2, no KL penalty, returns still restarted per chunk

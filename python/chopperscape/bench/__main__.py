@@ -1,4 +1,4 @@
-"""`python -m chopperscape.bench {modes,evaluate,report}` (see `chopperscape.bench`)."""
+"""`python -m chopperscape.bench {modes,evaluate,report,row}` (see `chopperscape.bench`)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ from pathlib import Path
 from .._cli import parse_options, print_line, run_command
 from ..modes import MODES
 from ..options import ENV_OPTIONS
-from . import evaluate, protocol, report, results
+from . import evaluate, protocol, record, report, results
+from . import rows as trained_rows
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -34,6 +35,11 @@ def main(argv: list[str] | None = None) -> int:
         help="the leaderboard row this run belongs to (the runs of one recipe's training seeds share it); "
         "default: the policy's source",
     )
+    e.add_argument(
+        "--training",
+        metavar="FILE",
+        help="a trained row's training record (RUN/training.json, written by `bench row`): recorded, its seeds checked",
+    )
     e.add_argument("--out", metavar="FILE", help="write the results file here (atomically); default: print it")
     r = sub.add_parser("report", help="aggregates with 95 %% intervals over results files, and their plots")
     r.add_argument("results", nargs="+", metavar="RESULTS")
@@ -42,7 +48,9 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--pool-modes", action="store_true", help="one row per policy over its modes (tasks)")
     r.add_argument("--json", action="store_true", help="print the rows as JSON instead of a Markdown table")
     r.add_argument("--resamples", type=int, default=report.RESAMPLES, help=argparse.SUPPRESS)
-    a = p.parse_args(argv)
+    trained_rows.add_parser(sub)
+    given = sys.argv[1:] if argv is None else list(argv)
+    a = p.parse_args(given)
 
     def command() -> int:
         if a.command == "modes":
@@ -58,13 +66,19 @@ def main(argv: list[str] | None = None) -> int:
                     p.error(f"--train-seeds {a.train_seeds!r}: expected FIRST:COUNT, e.g. 0:64")
             if a.out is not None:
                 results.check_out(a.out, a.policy)
-            doc = evaluate.run(a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds, a.name)
+            training = None if a.training is None else record.read_training(a.training)
+            command = ["python", "-m", "chopperscape.bench", *given]
+            doc = evaluate.run(
+                a.policy, a.mode, options, a.stochastic, a.policy_seed, a.trust_pickle, seeds, a.name, training, command
+            )
             text = results.dumps(doc)
             if a.out is None:
                 return print_line(text.rstrip("\n"))
             results.write_atomic(a.out, text)
             s = doc["summary"]
             return print_line(f"{a.out}: {a.mode}, mean return {s['mean_return']}, score {s['score']}")
+        if a.command == "row":
+            return trained_rows.main(a)
         if not 100 <= a.resamples <= report.MAX_RESAMPLES:
             p.error(f"--resamples {a.resamples}: allowed an integer in 100..={report.MAX_RESAMPLES}")
         docs = report.load_all(a.results)

@@ -40,7 +40,7 @@ from ..options import OBSERVATION_OPTIONS, PYTHON_BOOL_OPTIONS
 from ..policies import NAMES, VectorPolicy
 from ..policyfile import TRAIN_SEEDS
 from ..vector import VectorEnv
-from . import protocol, results
+from . import protocol, record, results
 
 #: What `--option` takes: observation options only (a mode fixes the rules; the protocol the step limit): the
 #: core's observation settings (`look` included) and the Python environments' `keep_dim`.
@@ -294,11 +294,15 @@ def run(
     trust_pickle: bool = False,
     train_seeds: tuple[int, int] | None = None,
     name: str | None = None,
+    training: dict[str, Any] | None = None,
+    command: list[str] | None = None,
 ) -> dict[str, Any]:
     """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
     (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
     `.zip`, a callable): they are checked against the evaluation seeds and recorded. `name` is the leaderboard row
-    the run belongs to (`results.check_name`): the runs of one recipe's training seeds share it."""
+    the run belongs to (`results.check_name`): the runs of one recipe's training seeds share it. `training` is a
+    trained row's training record (:mod:`.record`; its one range of seeds stands for `train_seeds`), `command` the
+    command line recorded as `meta.command`."""
     from ..learn.episodes import play_episodes
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
@@ -306,6 +310,13 @@ def run(
     m = modes.mode(mode)
     if name is not None:
         results.check_name(name)
+    if training is not None:
+        record.check_training(training, m["name"])
+        ranges = [tuple(r) for r in training["train_seeds"]]
+        if train_seeds is not None and [tuple(train_seeds)] != ranges:
+            raise ValueError(f"--train-seeds {train_seeds[0]}:{train_seeds[1]}: the training record says {ranges}")
+        if train_seeds is None and len(ranges) == 1:
+            train_seeds = (int(ranges[0][0]), int(ranges[0][1]))
     if train_seeds is not None:
         protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
     loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)
@@ -338,6 +349,10 @@ def run(
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "python": platform.python_version(),
             "platform": sys.platform,
+            **record.commit(),
+            **({} if command is None else {"command": list(command)}),
         },
     }
+    if training is not None:
+        doc["training"] = training
     return results.check(json.loads(results.dumps(doc)))

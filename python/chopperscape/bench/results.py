@@ -10,6 +10,7 @@ A results file is JSON, `"format": "chopperscape-bench/results/1"`:
                  "score"},
      "meta": {"created", "python", "platform"}}
 
+Optional fields on how a file was made (`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
 `meta` is the only part that differs between two evaluations of the same policy: everything else is a function of
 the policy, the mode and the protocol (:func:`comparable`). A file is written whole or not at all
 (:func:`write_atomic`), and read back only if every field checks (:func:`load`): a damaged file is refused with
@@ -25,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import modes
-from . import protocol
+from . import protocol, record
 
 FORMAT = "chopperscape-bench/results/1"
 KINDS = ("builtin", "recipe", "onnx", "sb3", "callable")
@@ -157,6 +158,10 @@ def check(doc: Any) -> dict[str, Any]:
             f"{protocol.MAX_EPISODE_STEPS}",
         )
     _need(doc["summary"] == summary(eps, mode["name"]), "`summary` does not match `episodes`")
+    try:  # the optional fields of how the file was made (commit, command, training): .record
+        record.check(doc)
+    except ValueError as e:
+        raise ResultsError(str(e)) from None
     return doc
 
 

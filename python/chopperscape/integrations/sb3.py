@@ -109,6 +109,9 @@ class ChopperScapeVecEnv(VecEnv):
         self._ep_return = np.zeros(self.num_envs, np.float64)
         self._ep_len = np.zeros(self.num_envs, np.int64)
         self._t0 = time.perf_counter()
+        #: The seeds of the last reset, one per environment (`None` for one reset without a seed; `None` before
+        #: any reset): an SB3 run's training seeds, since autoresets continue each environment's own generator.
+        self.reset_seeds: list[int | None] | None = None
         if seed is not None:
             self.seed(seed)
 
@@ -132,6 +135,7 @@ class ChopperScapeVecEnv(VecEnv):
 
     def reset(self) -> np.ndarray:
         seeds = self._seeds
+        self.reset_seeds = [None if s is None else int(s) for s in seeds]
         if all(s is None for s in seeds):
             obs, info = self.venv.reset()
         else:
