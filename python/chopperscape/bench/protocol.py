@@ -13,7 +13,9 @@ refuses to compare files of different protocols.
   and is recorded as such (`"actions": "sampled"`), a different protocol row.
 - **Runs**: one results file is one run (one trained model, or one policy seed). A stochastic policy is evaluated
   on 10 policy seeds (`--policy-seed 0 … 9`): run `r`'s policy for episode `k` is seeded `r · 2**32 + k`. A
-  deterministic one (the heuristic) gives the same file for every policy seed: one run.
+  deterministic one (the heuristic) gives the same file for every policy seed: one run. A row of trained policies
+  (one recipe's training seeds, under one `--name`) is 10 runs, one per training seed; one trained model alone is
+  one run. The report checks every row it prints against this count (`report.runs_required`).
 - **Score**: a run's score is its mean return over the 100 episodes; the aggregates normalise it by the most a
   mode allows (`10,000 × frame_skip`: +1 per underlying step up to the step limit), so 1.0 is a perfect run and the
   optimality gap is taken at γ = 1.
@@ -33,6 +35,11 @@ EVAL_EPISODES = 100
 MAX_EPISODE_STEPS = 10_000
 #: Policy seeds of the runs of a stochastic policy.
 POLICY_SEEDS = tuple(range(10))
+#: The runs of a stochastic policy (its policy seeds) and of a trained row (its training seeds); a deterministic
+#: policy alone is one run.
+RUNS = 10
+#: The built-in policies that draw from their generator (the others act on the state alone: deterministic).
+STOCHASTIC_BUILTINS = ("random",)
 #: Run `r`'s policy for episode `k` is seeded `r * POLICY_SEED_STRIDE + k`.
 POLICY_SEED_STRIDE = 2**32
 

@@ -10,11 +10,15 @@ entry per run; the aggregates are rliable's
 
 - mean: the mean over tasks of each task's mean over runs;
 - median: the median over tasks of each task's mean over runs (with one task, that task's mean);
-- IQM: the mean of the middle 50 % of all runs' scores, pooled (`scipy.stats.trim_mean(x, 0.25)`);
+- IQM: the interquartile mean of all runs' scores, pooled (`scipy.stats.trim_mean(x, 0.25)`: the lowest and the
+  highest `int(0.25 · n)` of the `n` scores are dropped and the rest averaged; with 10 runs, the middle 6);
 - optimality gap: `γ − mean(min(score, γ))` with γ = 1;
 
 each with a 95 % stratified-bootstrap percentile interval: runs are resampled with replacement within each task,
-independently, 50,000 times (rliable's defaults), from a seeded generator, so a report is reproducible. rliable
+independently, 50,000 times (rliable's defaults), from a seeded generator, so a report is reproducible. A task of
+one run (a deterministic policy: the heuristic, one trained model) has no runs to resample: its run's score is
+resampled instead, as the mean of its 100 episodes drawn with replacement (a percentile bootstrap over the episodes,
+the same 50,000 times), so its interval is over episodes, one run, and the table says so. rliable
 itself is not used: its release (1.2.0) does not import with the pinned numpy/pandas (its `arch` dependency
 fails); the same statistics are here in numpy and tested on hand-computed values. The pictures: the interval plot
 of the four aggregates, and the performance profile (the fraction of runs with a score above τ, averaged over
@@ -72,12 +76,21 @@ AGGREGATES: dict[str, Callable[[Tasks], float]] = {
 }
 
 
-def _resamples(tasks: Tasks, resamples: int, seed: int) -> list[np.ndarray]:
-    """Per task, a `(resamples, runs)` array of that task's runs drawn with replacement (stratified by task)."""
+def _resamples(
+    tasks: Tasks, resamples: int, seed: int, episodes: Sequence[np.ndarray | None] | None = None
+) -> list[np.ndarray]:
+    """Per task, a `(resamples, runs)` array of that task's runs drawn with replacement (stratified by task). A task
+    of one run whose `episodes` (its episodes' normalised returns) are given is a `(resamples, 1)` array of that
+    run's score with its episodes drawn with replacement instead: the interval over episodes of a one-run task."""
     rng = np.random.default_rng(seed)
     out = []
-    for t in tasks:
+    for i, t in enumerate(tasks):
         t = np.asarray(t, dtype=np.float64)
+        ep = None if episodes is None else episodes[i]
+        if ep is not None and len(t) == 1:
+            ep = np.asarray(ep, dtype=np.float64)
+            out.append(ep[rng.integers(0, len(ep), size=(resamples, len(ep)))].mean(axis=1, keepdims=True))
+            continue
         out.append(t[rng.integers(0, len(t), size=(resamples, len(t)))])
     return out
 
@@ -95,11 +108,15 @@ def _batched(name: str, draws: list[np.ndarray]) -> np.ndarray:
 
 
 def interval_estimates(
-    tasks: Tasks, resamples: int = RESAMPLES, level: float = 0.95, seed: int = 0
+    tasks: Tasks,
+    resamples: int = RESAMPLES,
+    level: float = 0.95,
+    seed: int = 0,
+    episodes: Sequence[np.ndarray | None] | None = None,
 ) -> dict[str, dict[str, float]]:
     """`{metric: {"point", "low", "high"}}` for every metric of `METRICS`: the point estimate and its stratified
-    percentile-bootstrap interval."""
-    draws = _resamples(tasks, resamples, seed)
+    percentile-bootstrap interval (over runs; over a one-run task's `episodes` where they are given)."""
+    draws = _resamples(tasks, resamples, seed, episodes)
     out = {}
     for name in METRICS:
         stats = _batched(name, draws)
@@ -131,39 +148,152 @@ def _label(doc: dict[str, Any]) -> str:
     return what if pol["actions"] in ("greedy", "as-is") else f"{what} ({pol['actions']})"
 
 
-def group(docs: Sequence[dict[str, Any]], pool_modes: bool = False) -> dict[str, dict[str, list[float]]]:
-    """`{row: {mode: [run scores]}}`. A row is a policy (its name or source, and its actions when sampled) on one mode;
-    with `pool_modes`, a policy on every mode it has runs of (the modes are then its tasks)."""
-    out: dict[str, dict[str, list[float]]] = {}
+def _runs(docs: Sequence[dict[str, Any]], pool_modes: bool = False) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """`{row: {mode: [results documents]}}`: the runs of each row (see :func:`group`)."""
+    out: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for d in docs:
         mode = d["mode"]["name"]
         key = _label(d) if pool_modes else f"{_label(d)} @ {mode}"
-        out.setdefault(key, {}).setdefault(mode, []).append(d["summary"]["score"])
+        out.setdefault(key, {}).setdefault(mode, []).append(d)
     return out
 
 
+def group(docs: Sequence[dict[str, Any]], pool_modes: bool = False) -> dict[str, dict[str, list[float]]]:
+    """`{row: {mode: [run scores]}}`. A row is a policy (its name or source, and its actions when sampled) on one mode;
+    with `pool_modes`, a policy on every mode it has runs of (the modes are then its tasks)."""
+    return {
+        row: {m: [d["summary"]["score"] for d in ds] for m, ds in by_mode.items()}
+        for row, by_mode in _runs(docs, pool_modes).items()
+    }
+
+
+def settings(doc: dict[str, Any]) -> dict[str, Any]:
+    """What every run of one row must share (:func:`check_settings`): the policy's kind, its actions, the observation
+    it played, and for a built-in or callable policy its source and the names of its policy arguments (a trained
+    row's runs are different files, so their paths and hashes differ; a callable's arguments' values may too, as
+    each training seed's weights file)."""
+    pol = doc["policy"]
+    out: dict[str, Any] = {"kind": pol["kind"], "actions": pol["actions"], "observation": pol.get("observation")}
+    if pol["kind"] in ("builtin", "callable"):
+        out["source"] = pol["source"]
+    if pol["kind"] == "callable":
+        out["policy arguments"] = sorted(pol.get("args") or {})
+    return out
+
+
+def _says(s: dict[str, Any], keys: Sequence[str]) -> str:
+    return ", ".join(f"{k} {json.dumps(s.get(k), sort_keys=True)}" for k in keys)
+
+
+def settings_conflict(name: str, new: dict[str, Any], new_file: str, old: dict[str, Any], old_file: str) -> str:
+    """The message refusing a run of row `name` whose settings differ from another run's, both named."""
+    keys = [k for k in (*old, *[k for k in new if k not in old]) if old.get(k) != new.get(k)]
+    return (
+        f"results file {new_file!r}: row {name!r} is already {old_file!r}'s with other settings ({_says(old, keys)}; "
+        f"here {_says(new, keys)}): the runs of one row share their settings; give this run another --name"
+    )
+
+
+def row_key(doc: dict[str, Any]) -> str:
+    """The row a run joins whatever its mode: its `policy.name` when it has one (sampled actions under that name
+    are the same name, so refused with other settings), else its label."""
+    return doc["policy"].get("name") or _label(doc)
+
+
+def check_settings(docs: Sequence[dict[str, Any]], paths: Sequence[str] | None = None) -> None:
+    """`ResultsError` for two runs of one row (:func:`row_key`) whose :func:`settings` differ, naming both files
+    and both settings: a new `--name` equal to an existing row with another policy source, kind, observation or
+    stochasticity is refused, never merged into it."""
+    names = list(paths) if paths is not None else [f"run {i}" for i in range(len(docs))]
+    first: dict[str, tuple[dict[str, Any], str]] = {}
+    for d, where in zip(docs, names):
+        key, s = row_key(d), settings(d)
+        if key not in first:
+            first[key] = (s, where)
+        elif first[key][0] != s:
+            raise ResultsError(settings_conflict(key, s, where, *first[key]))
+
+
+def runs_required(docs: Sequence[dict[str, Any]]) -> int:
+    """The runs the protocol (:mod:`.protocol`) asks of one row on one mode, from its runs: `protocol.RUNS` (10) for a
+    stochastic policy (sampled actions, a built-in that draws from its generator, or runs that differ by policy seed:
+    its policy seeds 0-9) and for a row of several policies (a recipe's training seeds: different files or policy
+    arguments); 1 for one deterministic policy (the heuristic, one trained model: the same file for every seed)."""
+    pols = [d["policy"] for d in docs]
+    stochastic = any(
+        p["actions"] == "sampled" or (p["kind"] == "builtin" and p["source"] in protocol.STOCHASTIC_BUILTINS)
+        for p in pols
+    )
+    policies = {(p["kind"], p["source"], p.get("sha256"), json.dumps(p.get("args"), sort_keys=True)) for p in pols}
+    if stochastic or len(policies) > 1 or len({p["policy_seed"] for p in pols}) > 1:
+        return protocol.RUNS
+    return 1
+
+
+#: Why a row needs ten runs (the refusal's words).
+WHY_TEN = "a stochastic policy: policy seeds 0-9; a trained row: ten training seeds"
+
+
+def _mean_return(docs: Sequence[dict[str, Any]]) -> float:
+    """The mean return of a mode's runs: every episode's return summed (integers, exact) over their count; the mean
+    of the runs' own `summary.mean_return`, without the rounding of `summary.score` to six decimals."""
+    return sum(int(e["return"]) for d in docs for e in d["episodes"]) / sum(len(d["episodes"]) for d in docs)
+
+
 def report(
-    docs: Sequence[dict[str, Any]], resamples: int = RESAMPLES, pool_modes: bool = False
+    docs: Sequence[dict[str, Any]], resamples: int = RESAMPLES, pool_modes: bool = False, partial: bool = False
 ) -> list[dict[str, Any]]:
-    """One row per policy and mode (or per policy, `pool_modes`): runs per mode, the mean return per mode, and the
-    aggregates of the normalised scores with their intervals."""
+    """One row per policy and mode (or per policy, `pool_modes`): runs per mode (and the runs the protocol asks,
+    :func:`runs_required`), the mean return per mode (the mean of its runs' episodes' returns, exact), and the
+    aggregates of the normalised scores with their intervals (over runs; over episodes for a mode of one run).
+    A row whose runs on a mode are not the protocol's count is refused (`ResultsError` naming it), or with
+    `partial` shown and marked; runs of one row with different settings are refused (:func:`check_settings`)."""
+    check_settings(docs)
     rows: list[dict[str, Any]] = []
-    for label, by_mode in group(docs, pool_modes).items():
+    for label, by_mode in _runs(docs, pool_modes).items():
         modes = [m["name"] for m in MODES if m["name"] in by_mode]
-        tasks = [np.array(by_mode[m]) for m in modes]
-        returns = {m: round(float(np.mean(by_mode[m])) * protocol.max_return(m), 1) for m in modes}
+        need = {m: runs_required(by_mode[m]) for m in modes}
+        for m in modes:
+            if len(by_mode[m]) != need[m] and not partial:
+                n = len(by_mode[m])
+                why = "one deterministic policy" if need[m] == 1 else WHY_TEN
+                raise ResultsError(
+                    f"row {label!r} has {n} run{'s' * (n != 1)} on {m}, and the protocol asks {need[m]} ({why}): "
+                    "add the missing runs (docs/site/bench.md), or give --partial to show it marked as partial"
+                )
+        tasks = [np.array([d["summary"]["score"] for d in by_mode[m]]) for m in modes]
+        episodes = [
+            np.array([e["return"] for e in by_mode[m][0]["episodes"]]) / protocol.max_return(m)
+            if len(by_mode[m]) == 1
+            else None
+            for m in modes
+        ]
+        returns = {m: round(_mean_return(by_mode[m]), 1) for m in modes}
         rows.append(
             {
                 "policy": label,
                 "modes": modes,
                 "runs": {m: len(by_mode[m]) for m in modes},
+                "runs_required": need,
+                "interval_over": {m: "episodes" if len(by_mode[m]) == 1 else "runs" for m in modes},
                 "mean_return": returns,
-                "aggregates": interval_estimates(tasks, resamples),
+                "aggregates": interval_estimates(tasks, resamples, episodes=episodes),
             }
         )
     order = {m["name"]: i for i, m in enumerate(MODES)}
     rows.sort(key=lambda r: ([order[m] for m in r["modes"]], -r["aggregates"]["iqm"]["point"], r["policy"]))
     return rows
+
+
+def runs_cell(r: dict[str, Any], m: str) -> str:
+    """A mode and its runs as the table shows them: `sticky-v0 (10)`; a one-run mode says that its interval is over
+    its episodes; a partial row (`--partial`) says how many runs of how many."""
+    n, need = r["runs"][m], r.get("runs_required", {}).get(m, r["runs"][m])
+    if n != need:
+        return f"{m} ({n} of {need} runs: partial)"
+    if n == 1:
+        return f"{m} (1 run: interval over its episodes)"
+    return f"{m} ({n})"
 
 
 def cell(text: str) -> str:
@@ -183,7 +313,7 @@ def markdown(rows: list[dict[str, Any]]) -> str:
     ]
     for r in rows:
         cells = [f"{a['point']:.4f} [{a['low']:.4f}, {a['high']:.4f}]" for a in (r["aggregates"][m] for m in METRICS)]
-        modes = ", ".join(f"{m} ({r['runs'][m]})" for m in r["modes"])
+        modes = ", ".join(runs_cell(r, m) for m in r["modes"])
         rets = ", ".join(f"{r['mean_return'][m]:,}" for m in r["modes"])
         lines.append(f"| {cell(r['policy'])} | {modes} | {rets} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
