@@ -9,7 +9,12 @@
 - an exported policy (`.onnx`, from `python -m chopperscape.learn.export`; run by onnxruntime);
 - a Stable-Baselines3 PPO or DQN `.zip` (give the observation it was trained on: `--option obs_type=features`);
 - a Python callable by import path, `pkg.mod:func`, called as `func(obs_batch) -> actions` on a batch of
-  observations (`--option` chooses them; features by default).
+  observations (`--option` chooses them; features by default); or, when it has a `seed` parameter, a *policy
+  factory* called once per run as `func(seed=R, stochastic=..., **args) -> policy`: `R` is `--policy-seed`,
+  `stochastic` is `--stochastic` (refused for a callable without that parameter), and `args` are the
+  `--policy-arg KEY=VALUE` strings (recorded as `policy.args`). Its module may declare the files it reads,
+  `FILES = ["{weights}", ...]` (each formatted with the policy arguments): they are hashed with its source
+  (`policy.files`, and `policy.sha256` over them all).
 
 The mode fixes the rules (a model's own training rules are replaced by the mode's); `--option NAME=VALUE` takes
 observation options only. The run is the protocol's (:mod:`.protocol`): 100 episodes from seed 1,000,000, the
@@ -23,11 +28,13 @@ policy trained on the evaluation seeds; 130 on Ctrl-C.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import importlib.util
 import inspect
 import json
 import platform
+import random
 import sys
 import time
 from pathlib import Path
@@ -83,6 +90,7 @@ def load(
     stochastic: bool = False,
     run: int = 0,
     trust_pickle: bool = False,
+    args: dict[str, str] | None = None,
 ) -> Loaded:
     """The policy `policy` (see the module's docs) set up to play mode `mode` with observation `options`."""
     options = dict(options or {})
@@ -92,13 +100,16 @@ def load(
     rules = protocol.mode_options(mode)
     actions = "sampled" if stochastic else "greedy"
     info: dict[str, Any] = {"source": policy, "sha256": None, "recipe": None, "train_seeds": None}
+    is_callable = policy not in NAMES and ":" in policy and not Path(policy).exists()
+    if args and not is_callable:
+        raise ValueError(f"--policy-arg is for a callable policy pkg.mod:func; {policy!r} is not one")
     if policy in NAMES:
         if stochastic:
             raise ValueError(f"--stochastic is for trained policies; built-in {policy!r} acts as it is")
         info.update(kind="builtin", actions="as-is")
         return Loaded(Builtin(policy, run), {"obs_type": "features", **options, **rules}, info)
-    if ":" in policy and not Path(policy).exists():
-        return _callable(policy, {**options, **rules}, stochastic, info)
+    if is_callable:
+        return _callable(policy, {**options, **rules}, stochastic, run, results.check_policy_args(dict(args or {})), info)
     path = Path(policy)
     if not path.is_file():
         raise ValueError(
@@ -242,7 +253,33 @@ def _train_seeds(text: str | None, path: Path) -> list[tuple[int, int]]:
     return [(first, count) for first, count in value]
 
 
-def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:
+def _declared_files(spec: str, module: Any, args: dict[str, str]) -> list[str]:
+    """The files a callable's module declares it reads (`FILES`, each entry formatted with the policy arguments)."""
+    declared = getattr(module, "FILES", ())
+    if isinstance(declared, str) or not (
+        isinstance(declared, (list, tuple)) and all(isinstance(f, str) and f for f in declared)
+    ):
+        raise ValueError(f"policy {spec!r}: its module's FILES must be a list of paths, e.g. ['{{weights}}']")
+    out = []
+    for entry in declared:
+        try:
+            path = entry.format(**args)
+        except (KeyError, IndexError, ValueError) as e:
+            raise ValueError(
+                f"policy {spec!r}: its FILES entry {entry!r} names a policy argument not given ({e}): give it with "
+                "--policy-arg KEY=VALUE"
+            ) from None
+        from .._checks import regular_file
+
+        regular_file(path, f"policy {spec!r}: its declared file {path!r}")
+        out.append(path)
+    return out
+
+
+def _callable(spec: str, options: dict, stochastic: bool, run: int, args: dict[str, str], info: dict) -> Loaded:
+    """A policy by import path. `func(obs_batch) -> actions` is called on each batch as it is; a *policy factory*,
+    a callable with a `seed` parameter, is called once, `func(seed=RUN, [stochastic=...], **args)`, and returns the
+    batch policy. The files its module's `FILES` declares (formatted with `args`) are hashed with its source."""
     mod_name, _, attr = spec.partition(":")
     try:
         module = importlib.import_module(mod_name)
@@ -254,14 +291,61 @@ def _callable(spec: str, options: dict, stochastic: bool, info: dict) -> Loaded:
     if not callable(func):
         raise ValueError(f"policy {spec!r} is not callable")
     try:
+        params = inspect.signature(func).parameters
+    except (TypeError, ValueError):  # some built-ins have no signature
+        params = {}  # type: ignore[assignment]
+    kwargs = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    factory = "seed" in params
+    takes_stochastic = factory and ("stochastic" in params or kwargs)
+    if not factory and args:
+        raise ValueError(
+            f"--policy-arg: policy {spec!r} is called as func(obs_batch) and takes no arguments; a policy factory "
+            "func(*, seed, stochastic=False, **args) -> policy does (docs/site/bench.md)"
+        )
+    if stochastic and not takes_stochastic:
+        raise ValueError(
+            f"--stochastic: policy {spec!r} cannot be asked to sample its actions (it has no `stochastic` parameter): "
+            "evaluate it as it acts, or give it one (a policy factory, docs/site/bench.md)"
+        )
+    unknown = sorted(k for k in args if k not in params and not kwargs)
+    if factory and unknown:
+        allowed = [k for k in params if k not in ("seed", "stochastic")]
+        raise ValueError(
+            f"--policy-arg {unknown[0]}: policy {spec!r} takes no such argument (it takes {', '.join(allowed) or 'none'})"
+        )
+    files = _declared_files(spec, module, args)
+    try:
         source = inspect.getsourcefile(module)
     except TypeError:  # a built-in module (builtins:len) has no source file
         source = None
-    info.update(kind="callable", actions="as-is", sha256=_atomic.sha256(Path(source)) if source else None)
+    hashed = [[str(source), _atomic.sha256(Path(source))]] if source else []
+    hashed += [[f, _atomic.sha256(f)] for f in files]
+    sha = hashed[0][1] if len(hashed) == 1 and not files else None
+    if files:
+        sha = hashlib.sha256("".join(h for _, h in hashed).encode()).hexdigest()
+    actions = "sampled" if stochastic else ("greedy" if takes_stochastic else "as-is")
+    info.update(kind="callable", actions=actions, sha256=sha)
+    if args:
+        info["args"] = dict(args)
+    if files:
+        info["files"] = hashed
+    # A callable drawing from Python's, numpy's or torch's global generator draws from one seeded by the run.
+    random.seed(run)
+    np.random.seed(run)
+    if "torch" in sys.modules:
+        sys.modules["torch"].manual_seed(run)
+    batch_policy: Any = func
+    if factory:
+        try:
+            batch_policy = func(seed=run, **({"stochastic": stochastic} if takes_stochastic else {}), **args)
+        except Exception as e:  # the factory's own failure: said in one line, naming it
+            raise ValueError(f"policy {spec!r} failed to start ({type(e).__name__}: {str(e)[:200]})") from None
+        if not callable(batch_policy):
+            raise ValueError(f"policy {spec!r} returned {type(batch_policy).__name__}: a policy factory returns a policy")
 
     def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
         try:
-            out = func(batch)
+            out = batch_policy(batch)
             actions = np.asarray(out)
         except Exception as e:  # the callable's own failure: said in one line, naming it
             raise ValueError(f"policy {spec!r} failed on a batch of observations ({type(e).__name__}: {e})") from None
@@ -296,13 +380,14 @@ def run(
     name: str | None = None,
     training: dict[str, Any] | None = None,
     command: list[str] | None = None,
+    policy_args: dict[str, str] | None = None,
 ) -> dict[str, Any]:
     """Evaluates `policy` on mode `mode` under the protocol; the results document (checked). `train_seeds`
     (`(first, count)`) declares the reset seeds a policy was trained on where its file does not record them (an SB3
     `.zip`, a callable): they are checked against the evaluation seeds and recorded. `name` is the leaderboard row
     the run belongs to (`results.check_name`): the runs of one recipe's training seeds share it. `training` is a
     trained row's training record (:mod:`.record`; its one range of seeds stands for `train_seeds`), `command` the
-    command line recorded as `meta.command`."""
+    command line recorded as `meta.command`, `policy_args` a callable's `--policy-arg`s."""
     from ..learn.episodes import play_episodes
 
     if isinstance(policy_seed, bool) or not isinstance(policy_seed, int) or not 0 <= policy_seed < 2**31:
@@ -319,7 +404,7 @@ def run(
             train_seeds = (int(ranges[0][0]), int(ranges[0][1]))
     if train_seeds is not None:
         protocol.check_training_seeds(*train_seeds, what=f"policy {policy!r}: its declared training")
-    loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle)
+    loaded = load(policy, mode, options, stochastic, policy_seed, trust_pickle, policy_args)
     if train_seeds is not None:
         known = loaded.info["train_seeds"]
         if known is not None and known != list(train_seeds):

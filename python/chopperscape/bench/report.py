@@ -214,6 +214,31 @@ def check_settings(docs: Sequence[dict[str, Any]], paths: Sequence[str] | None =
             raise ResultsError(settings_conflict(key, s, where, *first[key]))
 
 
+#: The most results files `check_joins` reads in the `--out` folder.
+MAX_JOIN_FILES = 5000
+
+
+def check_joins(doc: dict[str, Any], out: str | os.PathLike) -> None:
+    """`ValueError` when results file `out`'s folder holds a run of `doc`'s row (:func:`row_key`) with other
+    settings (:func:`settings`), naming that file and both settings: `bench evaluate --out` into a results folder
+    where the name is taken by another policy is refused before the file is written. Files that are not results
+    files, and `out` itself (which is replaced), are passed over; at most `MAX_JOIN_FILES` are read."""
+    target = Path(out)
+    folder = target.parent
+    key, mine = row_key(doc), settings(doc)
+    try:
+        names = sorted(p for p in folder.iterdir() if p.suffix == ".json" and p.name != target.name)
+    except OSError:
+        return
+    for path in names[:MAX_JOIN_FILES]:
+        try:
+            other = load(path)
+        except ResultsError:
+            continue
+        if row_key(other) == key and settings(other) != mine:
+            raise ValueError(settings_conflict(key, mine, str(out), settings(other), str(path)))
+
+
 def runs_required(docs: Sequence[dict[str, Any]]) -> int:
     """The runs the protocol (:mod:`.protocol`) asks of one row on one mode, from its runs: `protocol.RUNS` (10) for a
     stochastic policy (sampled actions, a built-in that draws from its generator, or runs that differ by policy seed:

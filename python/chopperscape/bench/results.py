@@ -3,14 +3,17 @@
 A results file is JSON, `"format": "chopperscape-bench/results/1"`:
 
     {"format": ..., "mode": {"name", "id", "options"}, "protocol": {...},
-     "policy": {"kind", "source", "sha256", "recipe", "actions", "policy_seed", "train_seeds", ["name"]},
+     "policy": {"kind", "source", "sha256", "recipe", "actions", "policy_seed", "train_seeds", ["name"],
+                ["args"], ["files"]},
      "package": {"name": "chopperscape", "version"},
      "episodes": [{"seed", "return", "steps", "cause"}, ...],
      "summary": {"mean_return", "median_return", "std_return", "min_return", "max_return", "mean_steps", "causes",
                  "score"},
      "meta": {"created", "python", "platform"}}
 
-Optional fields on how a file was made (`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
+A callable policy's optional `args` (its `--policy-arg`s, `{KEY: VALUE}` strings) and `files` (`[[path, sha256],
+...]`: its module's source and the files its `FILES` declares; `sha256` is then the SHA-256 of their digests
+concatenated in that order) say what it was given and what it read. Optional fields on how a file was made (`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
 `meta` is the only part that differs between two evaluations of the same policy: everything else is a function of
 the policy, the mode and the protocol (:func:`comparable`). A file is written whole or not at all
 (:func:`write_atomic`), and read back only if every field checks (:func:`load`): a damaged file is refused with
@@ -77,6 +80,26 @@ def check_name(name: Any) -> str:
     return name
 
 
+#: The most `--policy-arg`s, and the longest value one takes.
+MAX_POLICY_ARGS, MAX_POLICY_ARG = 32, 1000
+
+
+def check_policy_args(args: Any) -> dict[str, str]:
+    """A callable's policy arguments (`--policy-arg KEY=VALUE`, `policy.args`): at most 32, each key a Python
+    identifier other than `seed` and `stochastic` (the bench's own), each value a string of at most 1000 printable
+    characters. `ValueError` saying what is allowed."""
+    ok = isinstance(args, dict) and len(args) <= MAX_POLICY_ARGS
+    for k, v in args.items() if isinstance(args, dict) else ():
+        ok = ok and isinstance(k, str) and k.isidentifier() and k not in ("seed", "stochastic")
+        ok = ok and isinstance(v, str) and len(v) <= MAX_POLICY_ARG and v.isprintable()
+    if not ok:
+        raise ValueError(
+            f"policy arguments {str(args)[:80]!r}: allowed at most {MAX_POLICY_ARGS} KEY=VALUE, each KEY an identifier "
+            f"other than seed and stochastic, each VALUE at most {MAX_POLICY_ARG} printable characters"
+        )
+    return args
+
+
 def _need(cond: bool, what: str) -> None:
     if not cond:
         raise ResultsError(what)
@@ -119,6 +142,29 @@ def check(doc: Any) -> dict[str, Any]:
     sha = pol.get("sha256")
     _need(sha is None or (isinstance(sha, str) and len(sha) == 64), "`policy.sha256` must be 64 hex digits or null")
     _need(pol.get("actions") in ACTIONS, f"`policy.actions` must be one of {', '.join(ACTIONS)}")
+    _need(
+        pol["kind"] == "callable" or ("args" not in pol and "files" not in pol),
+        "`policy.args` and `policy.files` are a callable policy's only",
+    )
+    if "args" in pol:
+        try:
+            check_policy_args(pol["args"])
+        except ValueError as e:
+            raise ResultsError(f"`policy.args`: {e}") from None
+    files = pol.get("files")
+    _need(
+        files is None
+        or (
+            isinstance(files, list)
+            and 0 < len(files) <= 1000
+            and all(
+                isinstance(f, list) and len(f) == 2 and isinstance(f[0], str) and isinstance(f[1], str)
+                and len(f[1]) == 64
+                for f in files
+            )
+        ),
+        "`policy.files` must be a list of [path, sha256]",
+    )
     _need(_int(pol.get("policy_seed")) and pol["policy_seed"] >= 0, "`policy.policy_seed` must be an int >= 0")
     seeds = pol.get("train_seeds")
     _need(
