@@ -66,8 +66,9 @@ def test_a_run_given_twice_copied_or_for_another_policy_seed_of_a_deterministic_
         line = _one_line(capsys, str(second))
         assert says in line, line
     # Two different runs of one row are two runs.
-    assert bench(["report", str(RESULTS / "v0.random.seed0.json"), str(RESULTS / "v0.random.seed1.json")]) == 0
-    assert "v0 (2)" in capsys.readouterr().out
+    two = [str(RESULTS / "v0.random.seed0.json"), str(RESULTS / "v0.random.seed1.json")]
+    assert bench(["report", *two, "--partial"]) == 0  # two of a stochastic policy's ten: partial
+    assert "v0 (2 of 10 runs: partial)" in capsys.readouterr().out
 
 
 # --- 2. impossible results ----------------------------------------------------------------------------------------
@@ -170,7 +171,7 @@ def test_a_full_disk_leaves_the_old_plots(tmp_path, capsys, monkeypatch):
 
     files = [str(RESULTS / f"v0.random.seed{k}.json") for k in range(3)]
     plots = tmp_path / "plots"
-    assert bench(["report", *files, "--plots", str(plots), "--resamples", "100"]) == 0
+    assert bench(["report", *files, "--plots", str(plots), "--resamples", "100", "--partial"]) == 0
     capsys.readouterr()
     old = (plots / "intervals.png").read_bytes()
     real = Figure.savefig
@@ -181,7 +182,7 @@ def test_a_full_disk_leaves_the_old_plots(tmp_path, capsys, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(Figure, "savefig", full_disk)
-    assert bench(["report", *files, "--plots", str(plots), "--resamples", "100"]) == 1
+    assert bench(["report", *files, "--plots", str(plots), "--resamples", "100", "--partial"]) == 1
     _one_line(capsys, str(plots / "intervals.png"), "No space left on device")
     assert (plots / "intervals.png").read_bytes() == old
     assert sorted(p.name for p in plots.iterdir()) == ["intervals.png", "profile.png"]
@@ -502,7 +503,7 @@ def _named(tmp_path: Path, name: str, label: str, *, source: str | None = None) 
 def test_labels_cannot_forge_rows_or_reach_the_page_as_html(tmp_path, capsys):
     forged = "x | 9 (9) | 9 | 1.0 | 1.0 | 1.0 | 0.0 |\n| forged"
     files = _named(tmp_path, "s", forged, source="yes") + _named(tmp_path, "n", "<img src=x onerror=alert(1)>")
-    assert bench(["report", *files, "--resamples", "100"]) == 0
+    assert bench(["report", *files, "--resamples", "100", "--partial"]) == 0
     table = capsys.readouterr().out.splitlines()
     assert len(table) == 4  # the header, its rule, two rows
     assert all(line.replace("\\|", "").count("|") == 8 for line in table), table
@@ -515,7 +516,7 @@ def test_plots_draw_every_label_literally_and_in_the_legend(tmp_path, capsys):
     pytest.importorskip("matplotlib")
     files = _named(tmp_path, "m", r"PPO $\b$ run") + _named(tmp_path, "u", "_hidden")
     plots = tmp_path / "plots"
-    args = ["report", *files, "--plots", str(plots), "--format", "svg", "--resamples", "100"]
+    args = ["report", *files, "--plots", str(plots), "--format", "svg", "--resamples", "100", "--partial"]
     assert bench(args) == 0, capsys.readouterr().err
     assert "PPO $\\\\b$ run @ v0" in capsys.readouterr().out  # the table escapes the backslash
     profile = (plots / "profile.svg").read_text()
