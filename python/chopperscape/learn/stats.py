@@ -2,7 +2,8 @@
 statistical precipice", the ``rliable`` library): the interquartile mean (IQM) of per-run scores and its percentile
 bootstrap confidence interval over runs.
 
-The IQM is the mean of the middle 50 % of runs (``scipy.stats.trim_mean(x, 0.25)``), and its interval is the percentile
+The IQM is the interquartile mean of runs (``scipy.stats.trim_mean(x, 0.25)``: ``int(0.25 n)`` dropped at each end, so the middle
+6 of 10 runs), and its interval is the percentile
 bootstrap over runs. With one task, rliable's stratified bootstrap *is* this plain bootstrap over runs; it is written
 here in numpy rather than pulling in rliable, whose pinned ``arch`` dependency is heavy, for the 15 lines it would
 save. The bootstrap's generator is seeded, so a summary is reproducible. Used by the seed runner's summaries
@@ -18,7 +19,8 @@ RESAMPLES = 50_000
 
 
 def iqm(x: np.ndarray, axis: int = -1) -> np.ndarray:
-    """Interquartile mean along `axis`: the mean of the middle 50 % (``scipy.stats.trim_mean(x, 0.25)``).
+    """Interquartile mean along `axis` (``scipy.stats.trim_mean(x, 0.25)``): the lowest and highest ``int(0.25 n)`` of
+    the ``n`` values dropped, the rest averaged (the middle 6 of 10).
 
     >>> float(iqm(np.array([0.0, 10.0, 20.0, 30.0, 1000.0, -1000.0, 40.0, 50.0])))
     25.0
