@@ -22,7 +22,7 @@ import numpy as np
 import torch
 from torch import nn
 
-import chopperscape  # noqa: F401  (registers the ChopperScape ids)
+import chopperscape  # registers the ChopperScape ids
 
 
 def actor(obs_dim: int, n_actions: int, hidden: int = 64) -> nn.Sequential:

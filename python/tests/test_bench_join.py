@@ -125,7 +125,7 @@ def test_the_iqm_of_ten_runs_is_the_mean_of_the_middle_six():
 
 # --- 2. joining --------------------------------------------------------------------------------------------------
 
-FACTORIES = '''
+FACTORIES = """
 import numpy as np
 
 FILES = ["{table}"]
@@ -145,7 +145,7 @@ def factory(*, seed, stochastic=False, table, bias="0"):
 
 def no_stochastic(*, seed, table):
     return lambda obs: np.full(len(obs), 3)
-'''
+"""
 
 
 @pytest.fixture
@@ -194,7 +194,7 @@ def test_a_callable_factory_gets_its_seed_stochastic_and_arguments_and_its_files
     # What is recorded is checked.
     bad = json.loads(results.dumps(greedy))
     bad["policy"]["args"] = {"table": 3}
-    with pytest.raises(results.ResultsError, match="policy.args"):
+    with pytest.raises(results.ResultsError, match=r"policy\.args"):
         results.check(bad)
     bad = json.loads(results.dumps(run("heuristic", "v0")))
     bad["policy"]["args"] = {}

@@ -23,7 +23,9 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--mode", required=True, choices=[m["name"] for m in MODES])
     e.add_argument("--policy-seed", type=int, default=0, help="the run: seeds a stochastic policy (default 0)")
     e.add_argument(
-        "--stochastic", action="store_true", help="sample a trained policy's actions (not greedy); a callable's if it can"
+        "--stochastic",
+        action="store_true",
+        help="sample a trained policy's actions (not greedy); a callable's if it can",
     )
     e.add_argument(
         "--policy-arg",

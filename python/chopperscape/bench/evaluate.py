@@ -109,7 +109,9 @@ def load(
         info.update(kind="builtin", actions="as-is")
         return Loaded(Builtin(policy, run), {"obs_type": "features", **options, **rules}, info)
     if is_callable:
-        return _callable(policy, {**options, **rules}, stochastic, run, results.check_policy_args(dict(args or {})), info)
+        return _callable(
+            policy, {**options, **rules}, stochastic, run, results.check_policy_args(dict(args or {})), info
+        )
     path = Path(policy)
     if not path.is_file():
         raise ValueError(
@@ -311,7 +313,8 @@ def _callable(spec: str, options: dict, stochastic: bool, run: int, args: dict[s
     if factory and unknown:
         allowed = [k for k in params if k not in ("seed", "stochastic")]
         raise ValueError(
-            f"--policy-arg {unknown[0]}: policy {spec!r} takes no such argument (it takes {', '.join(allowed) or 'none'})"
+            f"--policy-arg {unknown[0]}: policy {spec!r} takes no such argument "
+            f"(it takes {', '.join(allowed) or 'none'})"
         )
     files = _declared_files(spec, module, args)
     try:
@@ -341,7 +344,9 @@ def _callable(spec: str, options: dict, stochastic: bool, run: int, args: dict[s
         except Exception as e:  # the factory's own failure: said in one line, naming it
             raise ValueError(f"policy {spec!r} failed to start ({type(e).__name__}: {str(e)[:200]})") from None
         if not callable(batch_policy):
-            raise ValueError(f"policy {spec!r} returned {type(batch_policy).__name__}: a policy factory returns a policy")
+            raise ValueError(
+                f"policy {spec!r} returned {type(batch_policy).__name__}: a policy factory returns a policy"
+            )
 
     def act(batch: np.ndarray, envs: VectorEnv) -> np.ndarray:
         try:

@@ -48,6 +48,8 @@ RESAMPLES = 50_000
 #: The most bootstrap resamples a report draws (`--resamples`): each takes a float per run of a row.
 MAX_RESAMPLES = 1_000_000
 GAMMA = 1.0
+#: Episode resamples drawn at once for a one-run task (bounds the memory of a large `--resamples`).
+EPISODE_BLOCK = 10_000
 Tasks = Sequence[np.ndarray]
 
 
@@ -89,7 +91,11 @@ def _resamples(
         ep = None if episodes is None else episodes[i]
         if ep is not None and len(t) == 1:
             ep = np.asarray(ep, dtype=np.float64)
-            out.append(ep[rng.integers(0, len(ep), size=(resamples, len(ep)))].mean(axis=1, keepdims=True))
+            means = [  # in blocks: a resample of episodes holds 100 of them, not one float per run
+                ep[rng.integers(0, len(ep), size=(min(EPISODE_BLOCK, resamples - k), len(ep)))].mean(axis=1)
+                for k in range(0, resamples, EPISODE_BLOCK)
+            ]
+            out.append(np.concatenate(means)[:, None])
             continue
         out.append(t[rng.integers(0, len(t), size=(resamples, len(t)))])
     return out

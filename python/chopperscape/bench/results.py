@@ -13,7 +13,8 @@ A results file is JSON, `"format": "chopperscape-bench/results/1"`:
 
 A callable policy's optional `args` (its `--policy-arg`s, `{KEY: VALUE}` strings) and `files` (`[[path, sha256],
 ...]`: its module's source and the files its `FILES` declares; `sha256` is then the SHA-256 of their digests
-concatenated in that order) say what it was given and what it read. Optional fields on how a file was made (`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
+concatenated in that order) say what it was given and what it read. Optional fields on how a file was made
+(`meta.commit`, `meta.command`, `training`) are :mod:`.record`'s.
 `meta` is the only part that differs between two evaluations of the same policy: everything else is a function of
 the policy, the mode and the protocol (:func:`comparable`). A file is written whole or not at all
 (:func:`write_atomic`), and read back only if every field checks (:func:`load`): a damaged file is refused with
@@ -158,7 +159,10 @@ def check(doc: Any) -> dict[str, Any]:
             isinstance(files, list)
             and 0 < len(files) <= 1000
             and all(
-                isinstance(f, list) and len(f) == 2 and isinstance(f[0], str) and isinstance(f[1], str)
+                isinstance(f, list)
+                and len(f) == 2
+                and isinstance(f[0], str)
+                and isinstance(f[1], str)
                 and len(f[1]) == 64
                 for f in files
             )
