@@ -4,9 +4,10 @@ bootstrap confidence interval over runs.
 
 The IQM is the interquartile mean of runs (``scipy.stats.trim_mean(x, 0.25)``: ``int(0.25 n)`` dropped at each end,
 so the middle 6 of 10 runs), and its interval is the percentile bootstrap over runs. With one task, rliable's
-stratified bootstrap *is* this plain bootstrap over runs; it is written here in numpy rather than pulling in rliable, whose pinned ``arch`` dependency is heavy, for the 15 lines it would
-save. The bootstrap's generator is seeded, so a summary is reproducible. Used by the seed runner's summaries
-(:mod:`chopperscape.learn.summary`) and ChopperScape-Bench's report.
+stratified bootstrap *is* this plain bootstrap over runs; it is written here in numpy rather than pulling in rliable,
+whose pinned ``arch`` dependency is heavy, for the 15 lines it would save. The bootstrap's generator is seeded, so a
+summary is reproducible. Used by the seed runner's summaries (:mod:`chopperscape.learn.summary`) and
+ChopperScape-Bench's report.
 """
 
 from __future__ import annotations
