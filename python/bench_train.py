@@ -128,6 +128,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--smoke", action="store_true", help="a few tiny updates per case (seconds; for the tests)")
     p.add_argument("--sb3", action="store_true", help="SB3's PPO with the same network and batch, as an anchor")
     p.add_argument("--threads", type=int, default=None, help="torch threads of the run (default the preset's)")
+    p.add_argument("--network", default=None, help="the network of the CNN cases (default the preset's)")
+    p.add_argument("--epochs", type=int, default=None, help="update epochs (default the preset's)")
+    p.add_argument("--minibatches", type=int, default=None, help="minibatches an epoch (default the preset's)")
     a = p.parse_args(argv)
     steps = 256 if a.smoke else a.steps
     print(
@@ -138,6 +141,12 @@ def main(argv: list[str] | None = None) -> int:
         recipe = recipe_for(case, steps, a.device, a.smoke)
         if a.threads is not None:
             recipe = replace(recipe, torch_threads=a.threads)
+        if a.network is not None and network_of(recipe) != "mlp":
+            recipe = replace(recipe, network=a.network)
+        if a.epochs is not None:
+            recipe = replace(recipe, update_epochs=a.epochs)
+        if a.minibatches is not None:
+            recipe = replace(recipe, num_minibatches=a.minibatches)
         torch.set_num_threads(recipe.torch_threads)
         phases = Phases()
         with tempfile.TemporaryDirectory() as out:
@@ -148,7 +157,8 @@ def main(argv: list[str] | None = None) -> int:
         floor = floors(recipe)
         print(
             f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s "
-            f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads)"
+            f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads, network {network_of(recipe)}, "
+            f"{recipe.update_epochs} epochs of {recipe.num_minibatches} minibatches)"
         )
         print(f"{'phase':<15} {'µs/step':>9} {'share':>7} {'floor µs':>9}")
         for name in PHASES:
