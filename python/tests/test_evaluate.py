@@ -60,7 +60,8 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3_files import save_normalization
     from chopperscape.learn import evaluate
 
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)
@@ -81,7 +82,7 @@ def test_evaluate_reads_an_sb3_model_with_its_vecnormalize(tmp_path, capsys, mon
     assert out["episodes"] == 2 and set(out["causes"]) <= {"bird", "fuel", "truncated"} and out["greedy"]
     # The statistics are applied: the normaliser evaluate loads is VecNormalize's own transform, and every
     # observation the model acts on went through it.
-    from chopperscape.integrations import sb3
+    from chopperscape.integrations import sb3_files as sb3
 
     norm = sb3.load_normalization(tmp_path, False)
     obs = env.get_original_obs()

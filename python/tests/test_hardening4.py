@@ -333,11 +333,11 @@ def test_a_results_fifo_is_refused_at_once(tmp_path):
 
 @needs_sb3
 def test_a_normalisation_file_nested_too_deeply_is_refused_by_name(tmp_path):
-    from chopperscape.integrations import sb3
+    from chopperscape.integrations import sb3_files
 
     (tmp_path / "vecnormalize.json").write_text("{" + '"a":{' * 50_000 + "}" * 50_001)
     with pytest.raises(ValueError, match=r"vecnormalize\.json is not a usable normalisation file: it is nested"):
-        sb3.load_normalization(tmp_path)
+        sb3_files.load_normalization(tmp_path)
 
 
 @needs_sb3

@@ -166,7 +166,8 @@ def sb3_model(tmp_path_factory):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from chopperscape.integrations.sb3 import ChopperScapeVecEnv, save_normalization
+    from chopperscape.integrations.sb3 import ChopperScapeVecEnv
+    from chopperscape.integrations.sb3_files import save_normalization
 
     folder = tmp_path_factory.mktemp("sb3")
     env = VecNormalize(ChopperScapeVecEnv(2, seed=0, obs_type="features", max_fuel=100), gamma=0.999)

@@ -129,7 +129,7 @@ def load(
         import torch
 
         torch.manual_seed(run)
-        from ..integrations.sb3 import algorithm
+        from ..integrations.sb3_files import algorithm
 
         algo = algorithm(path)
         act, played = players.load_sb3(path, stochastic, {**options, **rules}, trust_pickle, algo)

@@ -201,7 +201,7 @@ def train(
     from stable_baselines3 import DQN, PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from .sb3 import save_normalization
+    from .sb3_files import save_normalization
 
     s = settings_of(algo, settings or {})
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:

@@ -109,19 +109,19 @@ def load_sb3(
     cloudpickle, which runs code when loaded; its weights are read with `weights_only=True`. Unless
     `trust_pickle`, no pickle is loaded: every pickled setting is replaced by what this env and SB3's own
     classes give (named by the readable copy SB3 stores beside it), and a setting that cannot be is refused.
-    Normalisation: `vecnormalize.json` (`chopperscape.integrations.sb3.save_normalization`) is read as data; SB3's
+    Normalisation: `vecnormalize.json` (`chopperscape.integrations.sb3_files.save_normalization`) is read as data; SB3's
     `vecnormalize.pkl` is a pickle, read only with `trust_pickle`. `algorithm` is the file's
-    (`integrations.sb3.algorithm`) where the caller has read it already."""
+    (`integrations.sb3_files.algorithm`) where the caller has read it already."""
     import stable_baselines3
 
-    from ..integrations import sb3
+    from ..integrations import sb3, sb3_files
 
     what = f"model file {str(path)!r}"
     # As the adapter gives them (`ChopperScapeVecEnv(keep_dim=True)`): grayscale with a channel axis.
     env_options = {"keep_dim": True, **env_options}
     # As SB3's policy holds them: channel-last frames (a frame stack) are transposed to channels first.
     shape = tuple(sb3.policy_space(observation_space(env_options)).shape or ())
-    algorithm = algorithm or sb3.algorithm(path)
+    algorithm = algorithm or sb3_files.algorithm(path)
     if stochastic and algorithm == "DQN":
         raise ValueError(f"{what} is a DQN: its policy is greedy (argmax of Q), it cannot sample (drop --stochastic)")
     cls = getattr(stable_baselines3, algorithm)
@@ -131,7 +131,7 @@ def load_sb3(
         except pickle.UnpicklingError as e:  # its weights (`policy.pth`) are read with weights_only=True anyway
             raise ValueError(f"{what}: its weights are not tensors and plain data ({str(e).splitlines()[0]})") from None
     else:
-        custom = sb3.safe_load_objects(path, env_options)
+        custom = sb3_files.safe_load_objects(path, env_options)
         try:
             model = cls.load(path, device="cpu", custom_objects=custom)
         except (RuntimeError, KeyError, TypeError, AttributeError, pickle.UnpicklingError) as e:
@@ -145,7 +145,7 @@ def load_sb3(
             f"{what} takes observations of shape {model_shape}, but these env options give {shape} "
             f"({_describe(env_options)}): give the options it was trained with (--option ...)"
         )
-    norm = sb3.load_normalization(path.parent, trust_pickle)
+    norm = sb3_files.load_normalization(path.parent, trust_pickle)
 
     def act(obs: np.ndarray, envs: VectorEnv) -> np.ndarray:
         return model.predict(obs if norm is None else norm(obs), deterministic=not stochastic)[0]
