@@ -5,8 +5,8 @@
 `MODEL` is a file written by ``python -m chopperscape.learn.train`` (``model.pt``), a Stable-Baselines3 ``.zip`` (then
 give the env options it was trained with: ``--option obs_type=features``; a ``vecnormalize.json`` beside it, from
 ``chopperscape.integrations.sb3_files.save_normalization``, normalises the observations as in training), or the
-name of a built-in policy (``random``, ``heuristic``, ``noop``…, see ``chopperscape.policies``), so that baselines come from
-the same seeds; a file named like a built-in policy is given as ``./NAME``.
+name of a built-in policy (``random``, ``heuristic``, ``noop``…, see ``chopperscape.policies``), so that baselines
+come from the same seeds; a file named like a built-in policy is given as ``./NAME``.
 
 Loading a model never runs code from it: a recipe model is read with ``torch.load(weights_only=True)`` (tensors
 and plain data), and the pickled parts of an SB3 ``.zip`` are replaced by what the env gives. Pickles (SB3's
