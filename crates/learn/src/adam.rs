@@ -22,7 +22,11 @@ const BETA2: f64 = 0.999;
 impl Adam {
     /// Zero state for tensors of these sizes.
     pub fn new(sizes: &[usize]) -> Adam {
-        Adam { m: sizes.iter().map(|&n| vec![0.0; n]).collect(), v: sizes.iter().map(|&n| vec![0.0; n]).collect(), t: 0 }
+        Adam {
+            m: sizes.iter().map(|&n| vec![0.0; n]).collect(),
+            v: sizes.iter().map(|&n| vec![0.0; n]).collect(),
+            t: 0,
+        }
     }
 
     /// One step of `lr` on `params` with their gradients `grads` (torch's update, in `f32`).

@@ -157,10 +157,7 @@ pub fn to_onnx(agent: &Agent, norm: &ObsNorm, info: &ExportInfo) -> Result<Vec<u
             output: vec![value("logits", outputs)],
             ..Default::default()
         }),
-        metadata_props: props
-            .into_iter()
-            .map(|(k, v)| StringStringEntryProto { key: k.into(), value: v })
-            .collect(),
+        metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
         ..Default::default()
     };
     Ok(model.encode_to_vec())

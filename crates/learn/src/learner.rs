@@ -9,6 +9,7 @@ use chopperscape::{Config, N_ACTIONS, Rng};
 use chopperscape_vector::{CAUSE_BIRD, CAUSE_FUEL, Observations, VectorEnv};
 use serde::{Deserialize, Serialize};
 
+use crate::LearnError;
 use crate::adam::{Adam, clip_grad_norm};
 use crate::agent::Agent;
 use crate::gae::gae;
@@ -16,7 +17,6 @@ use crate::loss::{Batch, ppo_loss};
 use crate::progress::Row;
 use crate::recipe::Recipe;
 use crate::stats::{ObsNorm, RewardScale};
-use crate::LearnError;
 
 /// How many finished episodes the returns columns average (Python's `deque(maxlen=100)`).
 pub const RECENT_EPISODES: usize = 100;
@@ -77,6 +77,9 @@ pub struct State {
     pub updates: u64,
     /// The learner's generator (actions, minibatches).
     pub rng: [u64; 4],
+    /// Wall seconds of the run so far (the caller's clock; 0 where it keeps none).
+    #[serde(default)]
+    pub wall_s: f64,
 }
 
 /// The format name of [`State`].
@@ -92,9 +95,7 @@ pub fn env_config(recipe: &Recipe) -> Result<Config, LearnError> {
         let text = match value {
             serde_json::Value::String(s) => s.clone(),
             serde_json::Value::Null => "none".into(),
-            serde_json::Value::Array(items) => {
-                items.iter().map(|v| v.to_string()).collect::<Vec<_>>().join("x")
-            }
+            serde_json::Value::Array(items) => items.iter().map(|v| v.to_string()).collect::<Vec<_>>().join("x"),
             other => other.to_string(),
         };
         config.set(name, &text).map_err(|e| LearnError::Recipe(e.to_string()))?;
@@ -199,12 +200,16 @@ impl Learner {
         let mut norm = self.obs_norm.clone();
         let mut x = vec![0.0; raw.len()];
         norm.apply(raw, 1, false, &mut x);
-        let logits: Vec<f32> =
-            self.agent.actor.forward(&Tensor::from_vec(x, (1, raw.len()), &Device::Cpu)?, true)?.flatten_all()?.to_vec1()?;
+        let logits: Vec<f32> = self
+            .agent
+            .actor
+            .forward(&Tensor::from_vec(x, (1, raw.len()), &Device::Cpu)?, true)?
+            .flatten_all()?
+            .to_vec1()?;
         Ok(logits.iter().enumerate().fold(0, |best, (i, &l)| if l > logits[best] { i } else { best }))
     }
 
-    /// One update: a rollout, then the optimisation. `wall_s`: the run's wall seconds so far, for the row
+    /// One update: a rollout, then the optimisation. `wall_s`: the run's wall seconds, for the row
     /// (measured by the caller; the browser has no clock here).
     ///
     /// # Errors
@@ -255,7 +260,15 @@ impl Learner {
                     self.finished.push_back((self.ep_return[i], self.ep_len[i]));
                     self.episodes += 1;
                     let cause = self.envs.causes()[i];
-                    ends[if !term[i] { 2 } else if cause == CAUSE_BIRD { 0 } else if cause == CAUSE_FUEL { 1 } else { 2 }] += 1;
+                    ends[if !term[i] {
+                        2
+                    } else if cause == CAUSE_BIRD {
+                        0
+                    } else if cause == CAUSE_FUEL {
+                        1
+                    } else {
+                        2
+                    }] += 1;
                     self.ep_return[i] = 0.0;
                     self.ep_len[i] = 0;
                 }
@@ -294,7 +307,8 @@ impl Learner {
                     obs.extend_from_slice(&b_obs[k * dim..(k + 1) * dim]);
                 }
                 let pick_f = |v: &[f32]| idx.iter().map(|&k| v[k]).collect::<Vec<f32>>();
-                let (acts, old, a, rt) = (idx.iter().map(|&k| b_act[k]).collect::<Vec<u32>>(), pick_f(&b_logp), pick_f(&adv), pick_f(&ret));
+                let (acts, old, a, rt) =
+                    (idx.iter().map(|&k| b_act[k]).collect::<Vec<u32>>(), pick_f(&b_logp), pick_f(&adv), pick_f(&ret));
                 let x = Tensor::from_vec(obs, (mb, dim), dev)?;
                 let (logits, value) = self.agent.heads(&x, false)?;
                 let batch = Batch { actions: &acts, old_logp: &old, advantages: &a, returns: &rt };
@@ -314,7 +328,9 @@ impl Learner {
                 clip_grad_norm(&mut g, r.max_grad_norm);
                 self.adam.step(&mut params, &g, lr);
                 self.agent.set_params(&params)?;
-                for (s, x) in sums.iter_mut().zip([loss.entropy, loss.approx_kl, loss.clip_frac, loss.value, loss.policy]) {
+                for (s, x) in
+                    sums.iter_mut().zip([loss.entropy, loss.approx_kl, loss.clip_frac, loss.value, loss.policy])
+                {
                     *s += f64::from(x);
                 }
                 minibatches += 1;
@@ -369,6 +385,7 @@ impl Learner {
             env_steps: self.env_steps,
             updates: self.updates,
             rng: self.rng.state(),
+            wall_s: 0.0,
         })
     }
 

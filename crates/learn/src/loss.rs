@@ -114,6 +114,9 @@ mod tests {
         assert!(loss.approx_kl.abs() < 1e-6 && loss.clip_frac == 0.0);
         let total: f32 = loss.total.to_scalar().unwrap();
         assert!((total - (-0.01 * 5f32.ln() + 0.125)).abs() < 1e-6);
-        assert_eq!(standardise(&[1.0, 3.0]), vec![(-1.0f64 / (2f64.sqrt() + 1e-8)) as f32, (1.0 / (2f64.sqrt() + 1e-8)) as f32]);
+        assert_eq!(
+            standardise(&[1.0, 3.0]),
+            vec![(-1.0f64 / (2f64.sqrt() + 1e-8)) as f32, (1.0 / (2f64.sqrt() + 1e-8)) as f32]
+        );
     }
 }

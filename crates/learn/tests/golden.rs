@@ -4,11 +4,11 @@
 
 use candle_core::{Device, Tensor};
 use chopperscape::Rng;
+use chopperscape_learn::Recipe;
 use chopperscape_learn::agent::Agent;
 use chopperscape_learn::gae::gae;
 use chopperscape_learn::loss::{Batch, ppo_loss};
 use chopperscape_learn::stats::ObsNorm;
-use chopperscape_learn::Recipe;
 use serde_json::Value;
 
 fn golden(name: &str) -> Value {
@@ -17,7 +17,12 @@ fn golden(name: &str) -> Value {
 }
 
 fn f32s(v: &Value) -> Vec<f32> {
-    v.as_array().unwrap().iter().flat_map(|x| x.as_array().map_or_else(|| vec![x.clone()], Clone::clone)).map(|x| x.as_f64().unwrap() as f32).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|x| x.as_array().map_or_else(|| vec![x.clone()], Clone::clone))
+        .map(|x| x.as_f64().unwrap() as f32)
+        .collect()
 }
 
 fn close(got: &[f32], want: &[f32], tol: f32, what: &str) {
@@ -99,9 +104,19 @@ fn the_loss_and_its_gradients_are_torchs() {
     let num = |k: &str| g[k].as_f64().unwrap();
     let loss = ppo_loss(&logits, &value, &batch, num("clip"), num("ent_coef"), num("vf_coef")).unwrap();
     let total: f32 = loss.total.to_scalar().unwrap();
-    close(&[total, loss.policy, loss.value, loss.entropy, loss.approx_kl, loss.clip_frac],
-        &[num("total") as f32, num("policy") as f32, num("value") as f32, num("entropy") as f32, num("approx_kl") as f32, num("clip_frac") as f32],
-        1e-5, "loss parts");
+    close(
+        &[total, loss.policy, loss.value, loss.entropy, loss.approx_kl, loss.clip_frac],
+        &[
+            num("total") as f32,
+            num("policy") as f32,
+            num("value") as f32,
+            num("entropy") as f32,
+            num("approx_kl") as f32,
+            num("clip_frac") as f32,
+        ],
+        1e-5,
+        "loss parts",
+    );
     assert!(loss.clip_frac > 0.0, "the golden batch clips some samples");
     let grads = loss.total.backward().unwrap();
     for (k, (var, (want, shape))) in
