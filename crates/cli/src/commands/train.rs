@@ -58,6 +58,12 @@ pub struct TrainArgs {
     /// Replace a run already in --out (it is first moved whole into OUT/replaced-N)
     #[arg(long)]
     pub force: bool,
+    /// Envs stepped together (the preset's otherwise)
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    pub num_envs: Option<u32>,
+    /// Steps of each env per update (the preset's otherwise)
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    pub num_steps: Option<u32>,
     /// Threads of the network's matrix products (candle's, through RAYON_NUM_THREADS)
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub threads: u16,
@@ -169,6 +175,8 @@ pub fn run(args: TrainArgs) -> Result<ExitCode> {
         if let Some(steps) = args.steps {
             recipe.total_steps = steps;
         }
+        recipe.num_envs = args.num_envs.map_or(recipe.num_envs, |n| n as usize);
+        recipe.num_steps = args.num_steps.map_or(recipe.num_steps, |n| n as usize);
         if let Err(e) = recipe.check() {
             usage_bail!("{e}");
         }
