@@ -31,7 +31,7 @@ rm -rf "$out"
 mkdir -p "$out"
 quiet wasm-bindgen --target web --no-typescript --out-dir "$out/pkg" \
   "$target_dir/wasm32-unknown-unknown/release/chopperscape_web.wasm"
-cp web/index.html web/main.js web/style.css "$out/"
+cp web/index.html web/main.js web/train.js web/train-worker.js web/style.css "$out/"
 # The trained agents the page offers ("Watch: trained agent", the "Agent" menu): the exports of
 # models/ppo-features.pt and models/ppo-pixels.pt (frames alone).
 mkdir -p "$out/models"

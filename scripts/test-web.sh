@@ -30,7 +30,7 @@ bash scripts/build-web.sh
 
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
-if (cd web/tests && node --test --test-reporter=spec page.test.mjs cli.test.mjs) >"$log" 2>&1; then
+if (cd web/tests && node --test --test-reporter=spec page.test.mjs cli.test.mjs train.test.mjs) >"$log" 2>&1; then
   # Quiet on success: keep node's summary lines (tests, pass, fail, ...).
   grep -E '^ℹ (tests|pass|fail|skipped|duration_ms)' "$log" | sed 's/^/web: /'
 else

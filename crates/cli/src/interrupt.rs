@@ -40,6 +40,22 @@ pub fn is_stopping() -> bool {
     STOPPING.load(std::sync::atomic::Ordering::SeqCst)
 }
 
+static DEFERRING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+static PENDING: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+use std::sync::atomic::Ordering::SeqCst;
+
+/// From now on the first signal does not end the process: it is kept for [`pending`], so a command that saves
+/// its state between steps (`train`) can stop at a save point. A second signal ends the process as usual.
+pub fn defer() {
+    DEFERRING.store(true, SeqCst);
+}
+
+/// The signal that came while [`defer`] was on, if one did.
+pub fn pending() -> Option<i32> {
+    let signal = PENDING.load(SeqCst);
+    (signal != 0).then_some(signal)
+}
+
 static REGISTRY: Mutex<Vec<(u64, Cleanup)>> = Mutex::new(Vec::new());
 static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
@@ -163,7 +179,12 @@ pub fn install() -> anyhow::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
     std::thread::Builder::new().name("signals".into()).spawn(move || {
-        if let Some(signal) = signals.forever().next() {
+        for signal in signals.forever() {
+            // A deferring command (`train`) stops at its next save point; a second signal stops at once.
+            if DEFERRING.load(SeqCst) && PENDING.swap(signal, SeqCst) == 0 {
+                crate::report::error_line("stopping after this update, once the run is saved (again to stop at once)");
+                continue;
+            }
             STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
             let mut items = registry();
             // A stopped child says itself what it removed.

@@ -1,4 +1,4 @@
-//! The `chopperscape` command line: watch, play, record, replay and benchmark ChopperScape-v0.
+//! The `chopperscape` command line: watch, play, record, replay, benchmark and train ChopperScape-v0.
 //!
 //! Every command is one file under `commands/`; the game options of SPEC.md are one shared struct
 //! ([`options::GameOptions`]) mapped onto [`chopperscape::Config`] through `Config::set`, so every error names
@@ -45,6 +45,7 @@ enum Command {
     Bench(commands::bench::BenchArgs),
     Web(commands::web::WebArgs),
     Dataset(commands::dataset::DatasetArgs),
+    Train(commands::train::TrainArgs),
 }
 
 /// An error in how the command was called (exit code 2), as opposed to a failure while running it (exit code 1).
@@ -79,6 +80,9 @@ fn main() -> ExitCode {
             return ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(2));
         }
     };
+    if let Command::Train(a) = &cli.command {
+        commands::train::set_threads(a);
+    }
     if !matches!(cli.command, Command::Web(_))
         && let Err(e) = interrupt::install()
     {
@@ -92,6 +96,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => commands::bench::run(a),
         Command::Web(a) => commands::web::run(a),
         Command::Dataset(a) => commands::dataset::run(a),
+        Command::Train(a) => commands::train::run(a),
     };
     match result {
         Ok(code) => code,

@@ -16,6 +16,7 @@
 //! ```
 
 pub mod session;
+pub mod train;
 
 use session::Session;
 use wasm_bindgen::prelude::*;

@@ -6,6 +6,7 @@ pub mod demo;
 pub mod play;
 pub mod record;
 pub mod replay;
+pub mod train;
 pub mod web;
 
 use std::path::PathBuf;

@@ -1,0 +1,67 @@
+// The page's Train control in headless Chromium: the Rust learner in its Web Worker learns a few thousand
+// decisions (a small batch, `?train_envs=8&train_steps=64`), the curve grows, the flown policy is replaced by the
+// newer one, the page's own loop keeps running meanwhile, and Stop stops it.
+import assert from "node:assert/strict";
+import { after, before, test } from "node:test";
+import { launchChromium, openPage, serveDist } from "./harness.mjs";
+
+let server;
+let browser;
+
+before(async () => {
+  server = await serveDist();
+  browser = await launchChromium();
+});
+
+after(async () => {
+  await browser?.close();
+  await server?.close();
+});
+
+test("Train learns in a worker: the curve grows, the flown policy updates, the page does not block", async () => {
+  const { page, errors, close } = await openPage(browser, `${server.url}?train_envs=8&train_steps=64`);
+  try {
+    await page.waitForFunction(() => window.chopperscapeTrain !== undefined);
+    // Frames the page draws while the worker learns: a blocked main thread would draw none.
+    await page.evaluate(() => {
+      window.framesDrawn = 0;
+      const tick = () => {
+        window.framesDrawn++;
+        requestAnimationFrame(tick);
+      };
+      requestAnimationFrame(tick);
+    });
+    await page.click("#train");
+    // Six updates of 512 decisions: 3,072 decisions.
+    await page.waitForFunction(() => window.chopperscapeTrain.rows.length >= 6, null, { timeout: 240_000 });
+    const s = await page.evaluate(() => {
+      const t = window.chopperscapeTrain;
+      return { rows: t.rows.map((r) => r.envSteps), policies: t.policies, flown: t.flownPolicy, dps: t.decisionsPerSec };
+    });
+    assert.ok(s.rows.every((v, i) => i === 0 || v > s.rows[i - 1]), `decisions grow: ${s.rows}`);
+    assert.ok(s.rows.at(-1) >= 3000, `${s.rows.at(-1)} decisions`);
+    assert.ok(s.policies >= 6 && s.flown >= 1, `policies ${s.policies}, flown ${s.flown}`);
+    assert.ok(s.dps > 0);
+    // The page kept drawing while the worker learned (nothing blocked its main thread).
+    const frames = await page.evaluate(() => window.framesDrawn);
+    assert.ok(frames > 30, `${frames} frames drawn while learning`);
+    // The curve was drawn: the canvas holds the curve's red.
+    const red = await page.evaluate(() => {
+      const c = document.getElementById("curve");
+      const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 100 && d[i + 2] < 100) n++;
+      return n;
+    });
+    assert.ok(red > 20, `${red} red pixels in the curve`);
+    await page.click("#train"); // Stop
+    const stopped = await page.evaluate(() => window.chopperscapeTrain.rows.length);
+    await page.waitForTimeout(3000);
+    const later = await page.evaluate(() => window.chopperscapeTrain.rows.length);
+    assert.ok(later <= stopped + 1, `still learning after Stop: ${stopped} → ${later}`);
+    assert.equal(await page.textContent("#train"), "Resume");
+    assert.deepEqual(errors, []);
+  } finally {
+    await close();
+  }
+});
