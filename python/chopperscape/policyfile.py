@@ -170,3 +170,17 @@ def observation_space(options: dict[str, Any]) -> gym.Space:
 def observation_shape(options: dict[str, Any]) -> tuple[int, ...]:
     """The observation shape of one env with `options` (a `ValueError` naming a bad option)."""
     return tuple(observation_space(options).shape or ())
+
+
+def seed_ranges(seeds: list[int | None]) -> list[tuple[int, int]]:
+    """Reset seeds as the sorted ranges `(first, count)` of consecutive seeds that a policy file's `train_seeds`
+    holds; `ValueError` if an env was reset without a seed (its games are then unknown)."""
+    if any(s is None for s in seeds):
+        raise ValueError("an env was reset without a seed: its training seeds are unknown (give the run a --seed)")
+    ranges: list[list[int]] = []
+    for s in sorted({int(s) for s in seeds if s is not None}):
+        if ranges and ranges[-1][0] + ranges[-1][1] == s:
+            ranges[-1][1] += 1
+        else:
+            ranges.append([s, 1])
+    return [(first, count) for first, count in ranges]

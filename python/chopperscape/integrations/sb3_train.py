@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _atomic
+from .. import _atomic, policyfile
 from .._cli import print_line, run_command
 
 #: The format of `OUT/trainer.json`.
@@ -121,16 +121,10 @@ def settings_of(algo: str, given: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def seed_ranges(seeds: list[int | None] | None) -> list[list[int]]:
-    """Reset seeds as sorted ranges `[first, count]` of consecutive seeds; `ValueError` if one env had none."""
-    if not seeds or any(s is None for s in seeds):
+    """Reset seeds as sorted ranges `[first, count]` (`policyfile.seed_ranges`); `ValueError` if there are none."""
+    if not seeds:
         raise ValueError("an environment was reset without a seed: its training seeds are unknown")
-    ranges: list[list[int]] = []
-    for s in sorted({int(s) for s in seeds if s is not None}):
-        if ranges and ranges[-1][0] + ranges[-1][1] == s:
-            ranges[-1][1] += 1
-        else:
-            ranges.append([s, 1])
-    return ranges
+    return [list(r) for r in policyfile.seed_ranges(seeds)]
 
 
 def progress_callback(path: Path, minutes: float | None, every: int = 0) -> Any:

@@ -48,6 +48,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from ...policyfile import seed_ranges
 from ...vector import VectorEnv
 
 try:
@@ -203,20 +204,6 @@ def _find(env: Any, kind: type) -> Any:
             return env
         env = getattr(env, "env", None)
     return None
-
-
-def seed_ranges(seeds: list[int | None]) -> list[tuple[int, int]]:
-    """The seeds of `runner_seeds` (over all runners) as sorted ranges `(first, count)` of consecutive seeds;
-    `ValueError` if an env was reset without a seed (its games are then unknown)."""
-    if any(s is None for s in seeds):
-        raise ValueError("an env was reset without a seed: its training seeds are unknown (give the run a --seed)")
-    ranges: list[list[int]] = []
-    for s in sorted({int(s) for s in seeds if s is not None}):
-        if ranges and ranges[-1][0] + ranges[-1][1] == s:
-            ranges[-1][1] += 1
-        else:
-            ranges.append([s, 1])
-    return [(first, count) for first, count in ranges]
 
 
 register()
