@@ -4,17 +4,8 @@
     python python/examples/rllib_ppo.py --minutes 10                    # a local Ray
     ray start --head ...; python python/examples/rllib_ppo.py --address auto ...  # join a running cluster
 
-Each env runner is a separate process (a Ray actor) that steps `--envs-per-runner` games: by default one native
-`chopperscape.VectorEnv` (one Rust call a batch), or with `--python-envs` as many Python envs in RLlib's
-`SyncVectorEnv`. Every iteration appends a row to `--csv`, with the columns of the single-machine recipe:
-
-    env_steps,wall_s,episodes,mean_return,std_return,mean_length
-
-`env_steps`: env steps sampled so far; `wall_s`: seconds since training started; `episodes`: episodes finished so
-far; the others over the last 100 finished episodes (rows start once an episode has finished, as in the recipe).
-`--checkpoint DIR` saves the algorithm at the end; `--restore DIR` starts from such a checkpoint; `--summary FILE`
-writes a JSON summary (steps, seeds, PIDs and nodes per runner, a digest of the policy's weights, the full settings
-and the training seeds). See docs/rllib.md.
+Its runners, the progress CSV (`--csv`, the single-machine recipe's columns), `--checkpoint`, `--restore` and the
+`--summary` JSON are the trainer's: see `chopperscape.integrations.rllib.ppo` and docs/rllib.md.
 
 The trainer is `chopperscape.integrations.rllib.ppo` (`python -m chopperscape.integrations.rllib.ppo`, the bench's
 RLlib row); this script adds `--preset` (read from `chopperscape.learn.recipe.PRESETS`) and `--eval-episodes`
