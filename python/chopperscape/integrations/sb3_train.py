@@ -90,6 +90,10 @@ def recipe_settings(recipe: Any, lr_floor: float) -> dict[str, Any]:
     (SB3's MlpPolicy), learning rate annealed to `lr_floor` of itself (the recipe's schedule), and observations and
     rewards normalised by `VecNormalize` (the recipe's normalisation)."""
     r = recipe
+    from .sb3 import ppo_settings
+
+    ppo = ppo_settings(r)  # the adapter's reading of the recipe: rollout, batch, epochs, γ, λ, clip, coefficients
+    net_arch = ppo.pop("policy_kwargs")["net_arch"]
     return {
         "policy": "MlpPolicy",
         "num_envs": r.num_envs,
@@ -97,17 +101,9 @@ def recipe_settings(recipe: Any, lr_floor: float) -> dict[str, Any]:
         "normalize": True,
         "learning_rate": r.learning_rate,
         "lr_floor": lr_floor,
-        "n_steps": r.num_steps,
-        "batch_size": r.num_envs * r.num_steps // r.num_minibatches,
-        "n_epochs": r.update_epochs,
-        "gamma": r.gamma,
-        "gae_lambda": r.gae_lambda,
-        "clip_range": r.clip_coef,
+        **ppo,
         "clip_anneal": False,
-        "ent_coef": r.ent_coef,
-        "vf_coef": r.vf_coef,
-        "max_grad_norm": r.max_grad_norm,
-        "net_arch": [r.hidden, r.hidden],
+        "net_arch": net_arch,
     }
 
 
