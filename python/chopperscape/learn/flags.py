@@ -31,6 +31,47 @@ DESCRIPTION = "Trains the PPO recipe on ChopperScape-v0 (CleanRL-style sections,
 def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
     """The training command's flags and the recipe they make, every setting checked (exit 2 through argparse,
     naming the setting): what `train.main` trains, and what the seed runner checks before it trains any seed."""
+    p = _parser()
+    a = p.parse_args(args)
+    if a.resume is not None:
+        return a, _resumed(p, a)
+    if a.out is None:
+        p.error("the following arguments are required: --out (or --resume DIR)")
+    a.preset = a.preset or "features"
+    preset = dict(PRESETS[a.preset])
+    steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
+    preset.pop("total_steps", None)
+    allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
+    options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
+    if a.mode is not None:
+        try:
+            options = with_mode(a.mode, options)
+        except ValueError as e:
+            p.error(f"--mode {a.mode}: {e} (from --preset {a.preset} or --option)")
+    defaults = Recipe()
+    settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
+    settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
+    recipe = Recipe(
+        **settings,
+        env_options=options,
+        norm_obs=not a.no_norm_obs,
+        norm_reward=not a.no_norm_reward,
+        invert_frames=not a.no_invert_frames,
+        total_steps=steps,
+    )
+    try:
+        check_recipe(recipe)
+        check_minutes(a.minutes)
+        check_until(a.until)
+        check_run_folder(a.out, a.force)
+    except ValueError as e:
+        p.error(str(e))
+    return a, recipe
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The training command's flags: the run folder, the budget and stops, the preset and mode, every recipe
+    setting (`RECIPE_FLAGS`), the switches."""
     p = argparse.ArgumentParser(prog="python -m chopperscape.learn.train", description=DESCRIPTION)
     p.add_argument(
         "--out",
@@ -109,56 +150,28 @@ def parse(args: list[str]) -> tuple[argparse.Namespace, Recipe]:
         action="store_true",
         help="start over in an --out folder that already holds a run (that run is first moved into OUT/replaced-N)",
     )
-    a = p.parse_args(args)
-    if a.resume is not None:
-        given = [f"--{f.replace('_', '-')}" for f in RECIPE_FLAGS if getattr(a, f) is not None]
-        others = {"--steps": a.steps, "--preset": a.preset, "--mode": a.mode, "--option": a.option or None}
-        given += [k for k, v in others.items() if v is not None]
-        given += [
-            k
-            for k in ("--no-norm-obs", "--no-norm-reward", "--no-invert-frames", "--force")
-            if getattr(a, k[2:].replace("-", "_"))
-        ]
-        if a.out is not None and a.out != a.resume:
-            given.append("--out")
-        if given:
-            p.error(f"--resume continues the run with its own recipe.json: {', '.join(given)} cannot be given with it")
-        a.out = a.resume
-        try:
-            recipe = read_recipe(a.resume / "recipe.json")
-            check_minutes(a.minutes)
-            check_until(a.until)
-        except ValueError as e:
-            p.error(f"--resume {a.resume}: {e}")
-        return a, recipe
-    if a.out is None:
-        p.error("the following arguments are required: --out (or --resume DIR)")
-    a.preset = a.preset or "features"
-    preset = dict(PRESETS[a.preset])
-    steps = a.steps if a.steps is not None else preset.pop("total_steps", DEFAULT_STEPS)
-    preset.pop("total_steps", None)
-    allowed = [n for n in ENV_OPTIONS if n not in RESERVED_OPTIONS]
-    options = {**preset.pop("env_options", {}), **env_options(p, a.option, allowed=allowed, refused=RESERVED_OPTIONS)}
-    if a.mode is not None:
-        try:
-            options = with_mode(a.mode, options)
-        except ValueError as e:
-            p.error(f"--mode {a.mode}: {e} (from --preset {a.preset} or --option)")
-    settings = {**{f: getattr(defaults, f) for f in RECIPE_FLAGS}, **preset}
-    settings.update({f: getattr(a, f) for f in RECIPE_FLAGS if getattr(a, f) is not None})
-    recipe = Recipe(
-        **settings,
-        env_options=options,
-        norm_obs=not a.no_norm_obs,
-        norm_reward=not a.no_norm_reward,
-        invert_frames=not a.no_invert_frames,
-        total_steps=steps,
-    )
+    return p
+
+
+def _resumed(p: argparse.ArgumentParser, a: argparse.Namespace) -> Recipe:
+    """The recipe `--resume DIR` continues (its `recipe.json`); exit 2 naming any flag that would change it."""
+    given = [f"--{f.replace('_', '-')}" for f in RECIPE_FLAGS if getattr(a, f) is not None]
+    others = {"--steps": a.steps, "--preset": a.preset, "--mode": a.mode, "--option": a.option or None}
+    given += [k for k, v in others.items() if v is not None]
+    given += [
+        k
+        for k in ("--no-norm-obs", "--no-norm-reward", "--no-invert-frames", "--force")
+        if getattr(a, k[2:].replace("-", "_"))
+    ]
+    if a.out is not None and a.out != a.resume:
+        given.append("--out")
+    if given:
+        p.error(f"--resume continues the run with its own recipe.json: {', '.join(given)} cannot be given with it")
+    a.out = a.resume
     try:
-        check_recipe(recipe)
+        recipe = read_recipe(a.resume / "recipe.json")
         check_minutes(a.minutes)
         check_until(a.until)
-        check_run_folder(a.out, a.force)
     except ValueError as e:
-        p.error(str(e))
-    return a, recipe
+        p.error(f"--resume {a.resume}: {e}")
+    return recipe

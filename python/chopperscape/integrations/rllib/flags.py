@@ -74,6 +74,18 @@ def parse_args(
         description=description or "PPO on ChopperScape-v0 with Ray RLlib (new API stack).",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    _run_flags(p)
+    _game_flags(p, presets)
+    _ppo_flags(p)
+    _output_flags(p)
+    args = p.parse_args(argv)
+    _settle(p, args, presets)
+    _read_env_and_files(p, args)
+    return args
+
+
+def _run_flags(p: argparse.ArgumentParser) -> None:
+    """Where and how long it runs: runners, games, CPUs, the cluster, the budget."""
     p.add_argument("--env-runners", type=int, default=2, help="env runner processes (0: sample in this process)")
     p.add_argument(
         "--envs-per-runner", type=int, default=None, help="games each runner steps as one batch (default 16)"
@@ -123,6 +135,10 @@ def parse_args(
     mode.add_argument(
         "--python-envs", dest="native", action="store_false", help="Python sub-envs in RLlib's SyncVectorEnv instead"
     )
+
+
+def _game_flags(p: argparse.ArgumentParser, presets: Presets | None) -> None:
+    """What it plays: the observation, env options, the seed, and the preset where `presets` are given."""
     p.add_argument("--obs-type", default="features", help="env option obs_type (default: features)")
     p.add_argument("--env-config", default="{}", help="more env options as JSON, e.g. '{\"alien_prob\": 0.1}'")
     p.add_argument("--seed", type=int, default=0, help="RLlib seed (runner w, env i get distinct game seeds)")
@@ -136,6 +152,10 @@ def parse_args(
             "lr, gamma, lambda, entropy, clip, hidden width, frame skip and step budget, and no KL penalty; a flag "
             "given here wins",
         )
+
+
+def _ppo_flags(p: argparse.ArgumentParser) -> None:
+    """PPO's settings (unset ones come from the preset or `DEFAULTS`) and this process's threads."""
     p.add_argument("--train-batch-size", type=int, default=None, help="env steps per training iteration (8192)")
     p.add_argument("--minibatch-size", type=int, default=None, help="(default 1024)")
     p.add_argument("--epochs", type=int, default=None, help="passes over each train batch (default 4)")
@@ -166,6 +186,10 @@ def parse_args(
         help="torch threads of this process (the learner, and the sampler with 0 runners); runners get "
         "their CPUs' worth from Ray",
     )
+
+
+def _output_flags(p: argparse.ArgumentParser) -> None:
+    """What it writes and evaluates: checkpoints, the summary, the export, the held-out evaluation."""
     p.add_argument("--checkpoint", default=None, help="save the algorithm to this directory at the end")
     p.add_argument("--restore", default=None, help="start from a checkpoint saved by --checkpoint")
     p.add_argument("--summary", default=None, help="write a JSON summary to this file at the end")
@@ -190,7 +214,10 @@ def parse_args(
         action="store_true",
         help="no training: evaluate the checkpoint given by --restore (which is a pickle: only your own or trusted)",
     )
-    args = p.parse_args(argv)
+
+
+def _settle(p: argparse.ArgumentParser, args: argparse.Namespace, presets: Presets | None) -> None:
+    """Fills unset settings from the preset and `DEFAULTS`, then checks each range (exit 2 naming the flag)."""
     settings = dict(DEFAULTS)
     preset = getattr(args, "preset", None)
     if presets and preset is not None:
@@ -231,6 +258,10 @@ def parse_args(
         p.error("--eval-only needs --restore DIR and --eval-episodes N >= 1")
     if args.iterations is not None and args.iterations < 1:
         p.error(f"--iterations must be >= 1, got {args.iterations}")
+
+
+def _read_env_and_files(p: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Reads `--env-config` and `--hidden`, and checks `--export` and `--restore` before Ray starts."""
     try:
         extra = json.loads(args.env_config)
     except json.JSONDecodeError as e:
@@ -251,4 +282,3 @@ def parse_args(
             p.error(str(e).replace("--out", "--export"))
     if args.restore is not None and not os.path.isdir(args.restore):
         p.error(f"--restore {args.restore!r} is not a directory (give one written by --checkpoint)")
-    return args

@@ -205,45 +205,15 @@ def connect(args: argparse.Namespace) -> None:
         )
 
 
-def main(
-    argv: list[str] | None = None, args: argparse.Namespace | None = None, evaluate: Evaluate | None = None
-) -> int:
-    """Trains as the command line `argv` (or the parsed `args`) says; `evaluate` runs `--eval-episodes`."""
-    args = flags.parse_args(argv) if args is None else args
-    if args.eval_episodes and evaluate is None:
-        raise SystemExit("error: --eval-episodes: this trainer has no evaluation; use python/examples/rllib_ppo.py")
-    import ray
-    import torch
-
-    # Ray limits its workers' threads to their CPUs, not the driver's: torch's default (all cores) oversubscribes
-    # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
-    torch.set_num_threads(args.torch_threads)
-    from . import check_env_config, runner_seeds, seed_ranges
-
-    try:
-        check_env_config(args.env_config)
-    except ValueError as e:
-        raise SystemExit(f"error: {e}") from None
-    connect(args)
-    algo = build_config(args).build_algo()
-    summary: dict[str, Any] = {
-        "native": args.native,
-        "env_runners": args.env_runners,
-        "envs_per_runner": args.envs_per_runner,
-    }
-    if args.restore:
-        algo.restore_from_path(os.path.abspath(args.restore))
-        summary["restored_weights_sha256"] = weights_digest(algo)
-        summary["restored_env_steps"] = int(
-            algo.metrics.peek(("env_runners", "num_env_steps_sampled_lifetime"), default=0)
-        )
+def _train(algo: Any, args: argparse.Namespace, start: float) -> tuple[int, int, int, collections.Counter]:
+    """Trains until the budget (`--minutes`, `--iterations`, `--steps`), a progress row per iteration once an episode
+    has finished (the recipe's columns); returns the iterations, env steps, episodes and episodes per runner."""
     group = algo.env_runner_group
     window: collections.deque = collections.deque(maxlen=WINDOW)
     episodes_per_runner: collections.Counter = collections.Counter()
     episodes = 0
     env_steps = 0
     iterations = 0
-    start = time.monotonic()
     with _Curve(args.csv) if not args.eval_only else contextlib.nullcontext() as out:
         while not args.eval_only:
             result = algo.train()
@@ -286,6 +256,44 @@ def main(
                 or (args.steps is not None and env_steps >= args.steps)
             ):
                 break
+    return iterations, env_steps, episodes, episodes_per_runner
+
+
+def main(
+    argv: list[str] | None = None, args: argparse.Namespace | None = None, evaluate: Evaluate | None = None
+) -> int:
+    """Trains as the command line `argv` (or the parsed `args`) says; `evaluate` runs `--eval-episodes`."""
+    args = flags.parse_args(argv) if args is None else args
+    if args.eval_episodes and evaluate is None:
+        raise SystemExit("error: --eval-episodes: this trainer has no evaluation; use python/examples/rllib_ppo.py")
+    import ray
+    import torch
+
+    # Ray limits its workers' threads to their CPUs, not the driver's: torch's default (all cores) oversubscribes
+    # a machine whose cores the runners use (8x slower sampling with 0 runners on 2 busy cores).
+    torch.set_num_threads(args.torch_threads)
+    from . import check_env_config, runner_seeds, seed_ranges
+
+    try:
+        check_env_config(args.env_config)
+    except ValueError as e:
+        raise SystemExit(f"error: {e}") from None
+    connect(args)
+    algo = build_config(args).build_algo()
+    summary: dict[str, Any] = {
+        "native": args.native,
+        "env_runners": args.env_runners,
+        "envs_per_runner": args.envs_per_runner,
+    }
+    if args.restore:
+        algo.restore_from_path(os.path.abspath(args.restore))
+        summary["restored_weights_sha256"] = weights_digest(algo)
+        summary["restored_env_steps"] = int(
+            algo.metrics.peek(("env_runners", "num_env_steps_sampled_lifetime"), default=0)
+        )
+    group = algo.env_runner_group
+    start = time.monotonic()
+    iterations, env_steps, episodes, episodes_per_runner = _train(algo, args, start)
     reports = [r for r in group.foreach_env_runner(runner_report, local_env_runner=True) if r[2]]
     summary.update(
         iterations=iterations,
