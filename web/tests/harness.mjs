@@ -1,5 +1,6 @@
 // Shared pieces of the browser tests: a static server for web/dist, headless Debian Chromium, and the
 // native reference frame from the Rust example.
+import { after, before } from "node:test";
 import { execFileSync } from "node:child_process";
 import { createReadStream, existsSync, statSync } from "node:fs";
 import { createServer } from "node:http";
@@ -20,6 +21,21 @@ const TYPES = {
 };
 
 // Serves web/dist on 127.0.0.1 at a free port. Resolves to { url, close }.
+/** The page served from `web/dist` and one headless Chromium for a test file: registers `before`/`after` hooks that
+ * start and close both, and returns an object whose `server` and `browser` are set once they run. */
+export function useServedPage() {
+  const env = { server: undefined, browser: undefined };
+  before(async () => {
+    env.server = await serveDist();
+    env.browser = await launchChromium();
+  });
+  after(async () => {
+    await env.browser?.close();
+    await env.server?.close();
+  });
+  return env;
+}
+
 export async function serveDist() {
   if (!existsSync(join(DIST, "index.html"))) {
     throw new Error(`${DIST} is not built: run scripts/build-web.sh first`);

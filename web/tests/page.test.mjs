@@ -2,24 +2,13 @@
 import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
 import { join } from "node:path";
-import { after, before, test } from "node:test";
-import { firstDifference, HEIGHT, launchChromium, nativeFrame, openPage, ROOT, serveDist, WIDTH } from "./harness.mjs";
+import { test } from "node:test";
+import { firstDifference, HEIGHT, nativeFrame, openPage, ROOT, useServedPage, WIDTH } from "./harness.mjs";
 
-let server;
-let browser;
-
-before(async () => {
-  server = await serveDist();
-  browser = await launchChromium();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const env = useServedPage();
 
 async function withPage(fn) {
-  const session = await openPage(browser, server.url);
+  const session = await openPage(env.browser, env.server.url);
   try {
     await fn(session.page, session.errors);
   } finally {

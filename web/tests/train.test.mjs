@@ -2,24 +2,13 @@
 // decisions (a small batch, `?train_envs=8&train_steps=64`), the curve grows, the flown policy is replaced by the
 // newer one, the page's own loop keeps running meanwhile, and Stop stops it.
 import assert from "node:assert/strict";
-import { after, before, test } from "node:test";
-import { launchChromium, openPage, serveDist } from "./harness.mjs";
+import { test } from "node:test";
+import { openPage, useServedPage } from "./harness.mjs";
 
-let server;
-let browser;
-
-before(async () => {
-  server = await serveDist();
-  browser = await launchChromium();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const env = useServedPage();
 
 test("Train learns in a worker: the curve grows, the flown policy updates, the page does not block", async () => {
-  const { page, errors, close } = await openPage(browser, `${server.url}?train_envs=8&train_steps=64`);
+  const { page, errors, close } = await openPage(env.browser, `${env.server.url}?train_envs=8&train_steps=64`);
   try {
     await page.waitForFunction(() => window.chopperscapeTrain !== undefined);
     // Frames the page draws while the worker learns: a blocked main thread would draw none.
