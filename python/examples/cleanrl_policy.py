@@ -1,9 +1,10 @@
 """The policy of `cleanrl_ppo.py`'s saved weights, as the bench plays a callable policy (a *policy factory*):
 
-    python -m chopperscape.bench evaluate examples.cleanrl_policy:policy --mode sticky-v0 \
+    PYTHONPATH=python/examples python -m chopperscape.bench evaluate cleanrl_policy:policy --mode sticky-v0 \
         --policy-arg weights=runs/cleanrl/seed-0/weights.pt --train-seeds 0:8 --name "..." --out FILE
 
-(from `python/`, or with `python/` on `PYTHONPATH`, so that `examples` imports). The bench calls
+(with `python/examples` on `PYTHONPATH`, so that this module imports; not `python/`, whose `chopperscape` sources
+lack the compiled core and would shadow the installed package). The bench calls
 `policy(seed=R, stochastic=..., weights=...)` once per run: `R` is `--policy-seed`, `stochastic` is `--stochastic`
 (sample from the logits with a generator seeded `R`, instead of their argmax), `weights` is a `--policy-arg`. `FILES`
 declares the file the policy reads, named by its `weights` argument: the results file records its SHA-256 with this

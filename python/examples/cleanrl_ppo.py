@@ -1,5 +1,5 @@
 """A CleanRL-style PPO in one file, standing for an agent trained outside this package: plain Gymnasium, plain torch,
-and its policy saved as plain weights (a `state_dict` of tensors) that `examples.cleanrl_policy:policy` plays in the
+and its policy saved as plain weights (a `state_dict` of tensors) that `cleanrl_policy:policy` plays in the
 bench. The walk from this script to a leaderboard row: docs/site/bench.md, "Adding a row".
 
     python python/examples/cleanrl_ppo.py --mode sticky-v0 --seed 0 --steps 500000 --out runs/cleanrl/seed-0

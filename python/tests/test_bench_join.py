@@ -239,9 +239,14 @@ def test_a_name_taken_with_other_settings_is_refused_with_both_named(factories, 
 @needs_torch
 def test_a_cleanrl_style_agent_becomes_a_row(tmp_path):
     """docs/site/bench.md's walk: train `python/examples/cleanrl_ppo.py` (two seeds, 2,048 decisions), evaluate its
-    saved weights through `examples.cleanrl_policy:policy` under the row's name, then `bench report`: two of ten runs
+    saved weights through `cleanrl_policy:policy` under the row's name, then `bench report`: two of ten runs
     are refused, and shown marked partial with --partial."""
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "python"), os.environ.get("PYTHONPATH", "")])}
+    # Only the examples folder on the path: `python/` itself would shadow the installed package with its sources,
+    # which lack the compiled `_core` in a clean clone.
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT / "python" / "examples"), os.environ.get("PYTHONPATH", "")]),
+    }
     out = tmp_path / "results"
     out.mkdir()
     name = "CleanRL-style PPO, 2,048 decisions"
@@ -252,7 +257,7 @@ def test_a_cleanrl_style_agent_becomes_a_row(tmp_path):
         done = subprocess.run(train, capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr
         assert json.loads((run / "train.json").read_text())["train_seeds"] == [seed, 4]
-        ev = [sys.executable, "-m", "chopperscape.bench", "evaluate", "examples.cleanrl_policy:policy"]
+        ev = [sys.executable, "-m", "chopperscape.bench", "evaluate", "cleanrl_policy:policy"]
         ev += ["--mode", "sticky-v0", "--policy-arg", f"weights={run / 'weights.pt'}", "--train-seeds", f"{seed}:4"]
         ev += ["--name", name, "--out", str(out / f"sticky-v0.cleanrl.seed{seed}.json")]
         done = subprocess.run(ev, capture_output=True, text=True, env=env, timeout=600, cwd=tmp_path)
