@@ -13,15 +13,21 @@ header line gives the CPU seconds beside the wall seconds. The gap between a
 phase and its floor is what the loop's Python costs. On a shared machine, compare cases from one run only.
 ``--sb3`` adds, for each case with an MLP, Stable-Baselines3's PPO with the same network, batch, epochs and
 minibatches through the native adapter (`chopperscape.integrations.sb3`, `VecNormalize`), trained for the same steps
-in the same run: the anchor a user would pick instead. ``--smoke`` runs each case for a few updates of a tiny batch
-(seconds: the test command runs it so that it cannot rot; its figures mean nothing).
+in the same run: the anchor a user would pick instead. ``--rust PATH`` adds, for the ``fast`` and ``features``
+cases, the Rust learner (``PATH train --preset CASE --phases``, ``PATH`` the ``chopperscape`` command line:
+docs/rust-learner.md) at each of ``--rust-threads`` (default 1 and 2), same steps, same run: its phases, timed at
+the same places, in columns beside torch's, with its wall and CPU seconds. ``--smoke`` runs each case for a few
+updates of a tiny batch (seconds: the test command runs it so that it cannot rot; its figures mean nothing).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
+import resource
+import subprocess
 import sys
 import tempfile
 import time
@@ -120,6 +126,26 @@ def sb3_steps_per_second(recipe: Recipe, steps: int) -> float:
     return done / wall
 
 
+def rust_run(cli: str, case: str, steps: int, threads: int, smoke: bool) -> dict:
+    """The Rust learner on `case`'s preset for `steps` decisions at `threads` threads: its phase seconds
+    (`phases`), `decisions`, and the process's `wall` and `cpu` seconds."""
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [cli, "train", "--preset", case, "--steps", str(steps), "--threads", str(threads), "--phases"]
+        cmd += ["--out", out, "--force"]
+        if smoke:
+            cmd += ["--num-envs", "8", "--num-steps", "16"]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        wall = time.perf_counter()
+        done = subprocess.run(cmd, capture_output=True, text=True)
+        wall = time.perf_counter() - wall
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}): {done.stderr.strip()[-500:]}")
+    line = json.loads(done.stdout.strip().splitlines()[-1])
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return {"phases": line["phases"], "decisions": line["decisions"], "wall": wall, "cpu": cpu, "threads": threads}
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=131_072, help="env steps per case (default 131072)")
@@ -131,7 +157,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--network", default=None, help="the network of the CNN cases (default the preset's)")
     p.add_argument("--epochs", type=int, default=None, help="update epochs (default the preset's)")
     p.add_argument("--minibatches", type=int, default=None, help="minibatches an epoch (default the preset's)")
+    p.add_argument("--rust", metavar="PATH", help="the chopperscape command line: its learner beside torch's")
+    p.add_argument("--rust-threads", default="1,2", help="the Rust learner's thread counts (default 1,2)")
     a = p.parse_args(argv)
+    rust_threads = [int(t) for t in a.rust_threads.split(",")]
     steps = 256 if a.smoke else a.steps
     print(
         f"# {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, device {a.device}, "
@@ -160,13 +189,24 @@ def main(argv: list[str] | None = None) -> int:
             f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads, network {network_of(recipe)}, "
             f"{recipe.update_epochs} epochs of {recipe.num_minibatches} minibatches)"
         )
-        print(f"{'phase':<15} {'µs/step':>9} {'share':>7} {'floor µs':>9}")
+        rust = [rust_run(a.rust, case, steps, t, a.smoke) for t in rust_threads] if a.rust and case != "pixels" else []
+        for r in rust:
+            print(
+                f"Rust learner, {r['threads']} thread(s): {r['decisions']:,} env steps in {r['wall']:.1f} s, "
+                f"{r['decisions'] / r['wall']:,.0f} env steps/s ({r['cpu']:.1f} CPU s; process wall and CPU)"
+            )
+        print(
+            f"{'phase':<15} {'µs/step':>9} {'share':>7} {'floor µs':>9}"
+            + "".join(f" {'rust×' + str(r['threads']):>9}" for r in rust)
+        )
         for name in PHASES:
             sec = phases.seconds[name]
             f = f"{floor[name] * 1e6:9.2f}" if name in floor else f"{'–':>9}"
-            print(f"{name:<15} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}")
+            cols = "".join(f" {r['phases'][name] / max(r['decisions'], 1) * 1e6:9.2f}" for r in rust)
+            print(f"{name:<15} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}{cols}")
         other = wall - sum(phases.seconds.values())
-        print(f"{'(setup)':<15} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}")
+        cols = "".join(f" {(r['wall'] - sum(r['phases'].values())) / max(r['decisions'], 1) * 1e6:9.2f}" for r in rust)
+        print(f"{'(setup)':<15} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}{cols}")
         if a.sb3 and network_of(recipe) == "mlp":
             sb3 = sb3_steps_per_second(recipe, steps)
             print(f"SB3 PPO, the same network, batch and epochs: {sb3:,.0f} env steps/s ({done / wall / sb3:.1f}x)")

@@ -2,8 +2,13 @@
 reading a progress CSV back."""
 
 import csv
+import functools
 import importlib.util
+import json
 import os
+import pathlib
+import shutil
+import subprocess
 
 import pytest
 
@@ -30,6 +35,21 @@ needs_sb3 = pytest.mark.skipif(
 @pytest.fixture
 def short():
     return dict(SHORT)
+
+
+@functools.cache
+def cli() -> pathlib.Path | None:
+    """The `chopperscape` command line, built by cargo (debug), or None without cargo."""
+    if shutil.which("cargo") is None:
+        return None
+    root = pathlib.Path(__file__).resolve().parents[2]
+    subprocess.run(["cargo", "build", "-q", "-p", "chopperscape-cli"], cwd=root, check=True)
+    meta = json.loads(
+        subprocess.run(
+            ["cargo", "metadata", "--format-version", "1", "--no-deps"], cwd=root, check=True, capture_output=True
+        ).stdout
+    )
+    return pathlib.Path(meta["target_directory"]) / "debug" / "chopperscape"
 
 
 def progress_rows(path):

@@ -13,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from conftest import cli
 
 torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
 
@@ -77,11 +78,16 @@ def test_train_mode_trains_on_the_modes_rules_and_its_model_plays_them(mode, tmp
 
 
 def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
+    """torch's phases, SB3's anchor and the Rust learner's phases at the same places (`--rust`), in one table."""
     pytest.importorskip("stable_baselines3", reason="stable-baselines3 is not installed (the SB3 anchor)")
     from chopperscape.learn.phases import PHASES
 
+    exe = cli()
+    if exe is None:
+        pytest.skip("cargo is not installed: the Rust learner's column is not built")
+    cmd = [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "fast", "--sb3"]
     out = subprocess.run(
-        [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "fast", "--sb3"],
+        [*cmd, "--rust", str(exe), "--rust-threads", "1"],
         capture_output=True,
         text=True,
         timeout=300,
@@ -91,6 +97,10 @@ def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
     lines = out.stdout.splitlines()
     for phase in PHASES:
         (row,) = [line for line in lines if line.startswith(phase + " ")]
-        assert float(row.split()[1]) >= 0, row
+        torch_us, rust_us = float(row.split()[1]), float(row.split()[-1])
+        assert torch_us >= 0 and rust_us >= 0, row
+        if phase in ("env", "forward", "update_forward", "backward"):
+            assert rust_us > 0, row  # timed where the loop does that work
     assert any(line.startswith("## fast:") for line in lines)
+    assert any(line.startswith("Rust learner, 1 thread(s): ") for line in lines), out.stdout
     assert any(line.startswith("SB3 PPO, the same network") for line in lines), out.stdout

@@ -3,15 +3,14 @@ env and for the native vector env, through gymnasium wrappers, under any options
 
 from __future__ import annotations
 
-import functools
 import json
 import pathlib
-import shutil
 import subprocess
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import cli
 
 import chopperscape
 from chopperscape import policies
@@ -28,20 +27,6 @@ FLAGS = {
 }
 #: Short episodes, so that a debug build of the CLI plays them quickly.
 STEPS = 1500
-
-
-@functools.cache
-def cli() -> pathlib.Path | None:
-    """The `chopperscape` binary, built by cargo (debug), or None without cargo."""
-    if shutil.which("cargo") is None:
-        return None
-    subprocess.run(["cargo", "build", "-q", "-p", "chopperscape-cli"], cwd=ROOT, check=True)
-    meta = json.loads(
-        subprocess.run(
-            ["cargo", "metadata", "--format-version", "1", "--no-deps"], cwd=ROOT, check=True, capture_output=True
-        ).stdout
-    )
-    return pathlib.Path(meta["target_directory"]) / "debug" / "chopperscape"
 
 
 def demo(policy: str, episodes: int, seed: int, options: dict) -> list[dict]:

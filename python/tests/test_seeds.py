@@ -139,3 +139,66 @@ def test_seeds_summarise_reads_another_trainers_evaluations_and_refuses_mismatch
     with pytest.raises(SystemExit):
         seeds.main([*args, "--seeds", "0-1"])
     assert "--summarise DIR takes no --seeds" in capsys.readouterr().err
+
+
+def test_seeds_runner_trains_with_the_command_line_when_given_cli(tmp_path, capsys):
+    """`--cli PATH`: each seed is trained by `PATH train` (the Rust learner) and its `model.onnx` played by `PATH demo
+    --json` on the held-out seeds, summarised as `evaluate` summarises; only --preset is passed on. A stand-in
+    command line records how it was called and writes what the real one writes."""
+    from chopperscape.learn import seeds
+
+    calls = tmp_path / "calls.txt"
+    cli = tmp_path / "chopperscape"
+    cli.write_text(
+        f"""#!{sys.executable}
+import json, pathlib, sys
+args = sys.argv[1:]
+with open({str(calls)!r}, "a") as f:
+    f.write(" ".join(args) + "\\n")
+if args[0] == "train":
+    out = pathlib.Path(args[args.index("--out") + 1])
+    seed = int(args[args.index("--seed") + 1])
+    (out / "model.onnx").write_bytes(b"onnx")
+    (out / "progress.csv").write_text("env_steps,wall_s,episodes,mean_return\\n100,1,1,5\\n200,2,2,%d\\n" % (9 + seed))
+else:
+    first = int(args[args.index("--seed") + 1])
+    for k in range(int(args[args.index("--episodes") + 1])):
+        ret = 100 * (k + 1) + first % 7
+        cause = "bird" if k % 2 else "fuel"
+        print(json.dumps({{"episode": k, "seed": first + k, "steps": ret // 4, "return": ret, "cause": cause}}))
+"""
+    )
+    cli.chmod(0o755)
+    out = tmp_path / "rust"
+    args = ["--cli", str(cli), "--preset", "fast", "--seeds", "0-1", "--steps", "2000", "--out", str(out)]
+    args += ["--eval-episodes", "4", "--jobs", "1"]
+    assert seeds.main(args) == 0
+    lines = calls.read_text().splitlines()
+    assert f"train --out {out / 'seed-0'} --seed 0 --steps 2000 --force --preset fast" in lines
+    assert f"demo --policy {out / 'seed-1' / 'model.onnx'} --episodes 4 --seed 1000000 --json" in lines
+    result = json.loads((out / "seed-0" / "eval.json").read_text())
+    # Returns 100..400 (+ 1000000 % 7 = 1): the summary `evaluate` writes, with each episode.
+    assert result["mean_return"] == 251.0 and result["min_return"] == 101 and result["max_return"] == 401
+    assert result["causes"] == {"bird": 0.5, "fuel": 0.5} and result["episodes"] == 4
+    assert [e["seed"] for e in result["per_episode"]] == [1_000_000 + k for k in range(4)]
+    assert result["runner"]["trainer"] == "rust"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["seeds"] == [0, 1] and summary["iqm"] == 251.0
+    # The baselines play the preset's rules (frame skip 4), as the seeds were trained and evaluated.
+    assert json.loads((out / "baseline-heuristic.json").read_text())["runner"]["option"] == ["frame_skip=4"]
+    # Finished seeds are not trained again.
+    before = len(calls.read_text().splitlines())
+    assert seeds.main(args) == 0 and len(calls.read_text().splitlines()) == before
+    capsys.readouterr()
+    # Flags the Rust learner does not take, and a --cli that is not a program: refused before anything runs.
+    for bad, says in (
+        (["--ent-coef", "0.02"], "only --preset NAME is passed on, not --preset fast --ent-coef 0.02"),
+        (["--option", "max_fuel=150"], "only --preset NAME is passed on"),
+    ):
+        with pytest.raises(SystemExit) as e:
+            seeds.main([*args, *bad])
+        assert e.value.code == 2 and says in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        seeds.main(["--cli", str(tmp_path / "none"), "--seeds", "0", "--out", str(out)])
+    assert e.value.code == 2 and "not an executable file" in capsys.readouterr().err
+    assert len(calls.read_text().splitlines()) == before

@@ -14,6 +14,7 @@ use crate::adam::{Adam, clip_grad_norm};
 use crate::agent::Agent;
 use crate::gae::gae;
 use crate::loss::{Batch, ppo_loss};
+use crate::phases::{Laps, NoLaps, Phase};
 use crate::progress::Row;
 use crate::recipe::Recipe;
 use crate::stats::{ObsNorm, RewardScale};
@@ -215,6 +216,15 @@ impl Learner {
     /// # Errors
     /// A loss that is not finite (nothing is changed by that minibatch), an env error.
     pub fn update(&mut self, wall_s: f64) -> Result<Row, LearnError> {
+        self.update_laps(wall_s, &mut NoLaps)
+    }
+
+    /// [`Learner::update`], telling `laps` where each stretch of its work ends and which [`Phase`] it was
+    /// (the same work, the same result).
+    ///
+    /// # Errors
+    /// As [`Learner::update`].
+    pub fn update_laps(&mut self, wall_s: f64, laps: &mut dyn Laps) -> Result<Row, LearnError> {
         let r = self.recipe.clone();
         let (n, steps, dim) = (r.num_envs, r.num_steps, self.obs_dim);
         let lr = r.learning_rate_at(self.env_steps);
@@ -226,6 +236,7 @@ impl Learner {
         let mut ends = [0u64; 3];
         let dev = &Device::Cpu;
         let mut actions = vec![0i64; n];
+        laps.lap(Phase::Bookkeeping);
         // --- Rollout
         for t in 0..steps {
             let at = t * n;
@@ -240,10 +251,13 @@ impl Learner {
                 b_act[at + i] = a as u32;
                 b_logp[at + i] = logp;
             }
+            laps.lap(Phase::Forward);
             b_val[at..at + n].copy_from_slice(&value);
             b_obs[at * dim..(at + n) * dim].copy_from_slice(&self.next_obs);
             b_valid[at..at + n].copy_from_slice(&valid);
+            laps.lap(Phase::Bookkeeping);
             self.envs.step(&actions).map_err(LearnError::env)?;
+            laps.lap(Phase::Env);
             let (term, trunc) = (self.envs.terminated(), self.envs.truncated());
             let done: Vec<bool> = term.iter().zip(trunc).map(|(a, b)| a | b).collect();
             let rewards = self.envs.rewards().to_vec();
@@ -277,12 +291,15 @@ impl Learner {
             b_rew[at..at + n].copy_from_slice(&scaled);
             b_done[at..at + n].copy_from_slice(&done);
             self.next_done = done;
+            laps.lap(Phase::Bookkeeping);
             self.observe();
+            laps.lap(Phase::ObsNorm);
         }
         // --- Advantages
         let x = Tensor::from_slice(&self.next_obs, (n, dim), dev)?;
         let next_value: Vec<f32> = self.agent.critic.forward(&x, true)?.flatten_all()?.to_vec1()?;
         let (adv, ret) = gae(n, &b_rew, &b_val, &b_done, &b_valid, &next_value, r.gamma as f32, r.gae_lambda as f32);
+        laps.lap(Phase::Gae);
         let keep: Vec<usize> = (0..len).filter(|&k| b_valid[k]).collect();
         let size = keep.len();
         // --- Optimisation
@@ -310,6 +327,7 @@ impl Learner {
                 let (acts, old, a, rt) =
                     (idx.iter().map(|&k| b_act[k]).collect::<Vec<u32>>(), pick_f(&b_logp), pick_f(&adv), pick_f(&ret));
                 let x = Tensor::from_vec(obs, (mb, dim), dev)?;
+                laps.lap(Phase::Bookkeeping);
                 let (logits, value) = self.agent.heads(&x, false)?;
                 let batch = Batch { actions: &acts, old_logp: &old, advantages: &a, returns: &rt };
                 let loss = ppo_loss(&logits, &value, &batch, r.clip_coef, r.ent_coef, r.vf_coef)?;
@@ -317,7 +335,9 @@ impl Learner {
                 if !total.is_finite() {
                     return Err(LearnError::NotFinite { loss: total, update: self.updates });
                 }
+                laps.lap(Phase::UpdateForward);
                 let grads = loss.total.backward()?;
+                laps.lap(Phase::Backward);
                 let mut g: Vec<Vec<f32>> = vars
                     .iter()
                     .map(|v| match grads.get(v.as_tensor()) {
@@ -328,6 +348,7 @@ impl Learner {
                 clip_grad_norm(&mut g, r.max_grad_norm);
                 self.adam.step(&mut params, &g, lr);
                 self.agent.set_params(&params)?;
+                laps.lap(Phase::Optimizer);
                 for (s, x) in
                     sums.iter_mut().zip([loss.entropy, loss.approx_kl, loss.clip_frac, loss.value, loss.policy])
                 {
@@ -345,6 +366,7 @@ impl Learner {
             let s = (self.finished.iter().map(|e| (e.0 - m).powi(2)).sum::<f64>() / c).sqrt();
             (m, s, self.finished.iter().map(|e| e.1 as f64).sum::<f64>() / c)
         });
+        laps.lap(Phase::Bookkeeping);
         Ok(Row {
             env_steps: self.env_steps,
             wall_s,

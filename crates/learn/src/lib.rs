@@ -5,6 +5,7 @@
 //! - [`Recipe`]: Python's `Recipe` and the presets it trains (`fast`, `features`);
 //! - [`Learner`]: one update per call ([`Learner::update`], a [`progress::Row`] of the curve), its
 //!   [`State`] for `--resume`;
+//! - [`phases`]: where an update's time goes ([`Learner::update_laps`]), in Python's phases;
 //! - [`export::to_onnx`]: the policy as the ONNX file `chopperscape-policy` plays;
 //! - the parts, each tested against hand-computed values and Python's on the same batch (`tests/golden.rs`):
 //!   [`gae::gae`], [`loss::ppo_loss`], [`stats`] (normalisers), [`adam`], [`agent`] (the MLP).
@@ -15,6 +16,7 @@ pub mod export;
 pub mod gae;
 mod learner;
 pub mod loss;
+pub mod phases;
 pub mod progress;
 pub mod recipe;
 pub mod stats;

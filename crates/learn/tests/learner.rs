@@ -49,3 +49,40 @@ fn the_export_plays_as_the_learner() {
         }
     }
 }
+
+/// Laps that count each phase's calls.
+#[derive(Default)]
+struct Count([u64; 9]);
+
+impl chopperscape_learn::phases::Laps for Count {
+    fn lap(&mut self, phase: chopperscape_learn::phases::Phase) {
+        self.0[phase as usize] += 1;
+    }
+}
+
+#[test]
+fn timed_updates_are_the_same_updates_and_lap_every_phase_but_logging() {
+    let (mut plain, mut timed) = (Learner::new(small()).unwrap(), Learner::new(small()).unwrap());
+    let mut count = Count::default();
+    for _ in 0..2 {
+        assert_eq!(plain.update(0.0).unwrap(), timed.update_laps(0.0, &mut count).unwrap());
+    }
+    let (steps, minibatches) = (2 * 32, 2 * small().update_epochs * small().num_minibatches);
+    let names = chopperscape_learn::phases::PHASES;
+    let seen: std::collections::HashMap<_, _> = names.iter().zip(count.0).collect();
+    assert_eq!(seen[&"env"], steps as u64);
+    assert_eq!(seen[&"obs_norm"], steps as u64);
+    assert_eq!(seen[&"forward"], steps as u64);
+    assert_eq!(seen[&"gae"], 2);
+    for phase in ["update_forward", "backward", "optimizer"] {
+        assert_eq!(seen[&phase], minibatches as u64, "{phase}");
+    }
+    assert_eq!(seen[&"logging"], 0, "logging is the caller's");
+    // The phases are Python's (python/chopperscape/learn/phases.py), in its order.
+    let python =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../python/chopperscape/learn/phases.py"))
+            .unwrap();
+    let line = python.lines().find(|l| l.starts_with("PHASES = (")).expect("Python's PHASES");
+    let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+    assert_eq!(line, format!("PHASES = ({})", quoted.join(", ")));
+}

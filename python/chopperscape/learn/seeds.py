@@ -16,6 +16,13 @@ It then writes (:mod:`chopperscape.learn.summary`):
   median, the mean, how many seeds beat the heuristic and the worst seed;
 - ``OUT/curves.png`` (with matplotlib): every seed's training curve, their IQM with a 95 % band, random and heuristic.
 
+``--cli PATH`` trains every seed with the Rust learner instead (``PATH train --preset P``, ``PATH`` being the
+``chopperscape`` command line: docs/rust-learner.md) and evaluates its ``model.onnx`` with ``PATH demo --json`` on the
+same held-out seeds (the episodes ``evaluate`` plays), summarised as ``evaluate`` summarises them; only ``--preset``
+is passed on:
+
+    python -m chopperscape.learn.seeds --cli target/release/chopperscape --preset fast --seeds 0-9 --out runs/rust
+
 Other trainers' runs (SB3, RLlib) are summarised the same way from their files: ``--summarise DIR`` reads
 ``DIR/seed-K.eval.json`` (``python -m chopperscape.learn.evaluate`` output, or ``rllib_ppo.py --eval-out``) and
 ``DIR/seed-K.csv`` (a progress CSV with ``env_steps`` and ``mean_return``) for every ``K`` there, evaluates the
@@ -119,6 +126,34 @@ def _evaluate(model: str, out: Path, episodes: int, seed: int, options: list[str
     return read_eval(out)
 
 
+def _evaluate_cli(cli: str, model: Path, out: Path, episodes: int, seed: int, log: Path) -> dict[str, Any]:
+    """`model` (an ONNX policy) played by the command line's `demo --json` on `episodes` held-out seeds from
+    `seed` (under the rules its file records), summarised as `evaluate` summarises its episodes."""
+    from .episodes import summary
+
+    cmd = [cli, "demo", "--policy", str(model), "--episodes", str(episodes), "--seed", str(seed), "--json"]
+    with open(log, "a") as err:
+        done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=err, text=True)
+    if done.returncode != 0:
+        raise RuntimeError(f"evaluating {model} failed ({done.returncode}); see {log}")
+    rows = [json.loads(line) for line in done.stdout.splitlines() if line.strip()]
+    if len(rows) != episodes:
+        raise RuntimeError(f"evaluating {model}: {len(rows)} episodes played, {episodes} asked; see {log}")
+    result = {"model": str(model), "seed": seed, **summary(rows)}
+    result["per_episode"] = [{k: r[k] for k in ("seed", "return", "steps", "cause")} for r in rows]
+    _atomic.write_text(out, json.dumps(result, allow_nan=False))
+    return read_eval(out)
+
+
+def _train_command(seed: int, a: argparse.Namespace, run: Path, forward: list[str]) -> list[str]:
+    """The command that trains seed `seed` into `run`: Python's trainer, or the Rust learner with `--cli`. With
+    `--force`: what is in the folder is an interrupted run of this seed (a finished one has its eval.json)."""
+    where = ["--out", str(run), "--seed", str(seed), "--steps", str(a.steps), "--force"]
+    if a.cli:
+        return [a.cli, "train", *where, *forward]
+    return [sys.executable, "-m", "chopperscape.learn.train", *where, *forward]
+
+
 def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[str, Any]) -> dict[str, Any]:
     """Trains and evaluates one seed unless its evaluation with the same settings is already there."""
     run = a.out / f"seed-{seed}"
@@ -128,26 +163,14 @@ def _seed_run(seed: int, a: argparse.Namespace, forward: list[str], key: dict[st
         if prev.get("runner") == key:
             return prev
     run.mkdir(parents=True, exist_ok=True)
-    # --force: what is in the folder is an interrupted run of this seed (a finished one has its eval.json).
-    cmd = [
-        sys.executable,
-        "-m",
-        "chopperscape.learn.train",
-        "--out",
-        str(run),
-        "--seed",
-        str(seed),
-        "--steps",
-        str(a.steps),
-        "--force",
-        *forward,
-    ]
     started = time.monotonic()
-    _run(f"training seed {seed}", cmd, run / "train.log")
+    _run(f"training seed {seed}", _train_command(seed, a, run, forward), run / "train.log")
     wall = time.monotonic() - started
-    result = _evaluate(
-        str(run / "model.pt"), run / ".eval-raw.json", a.eval_episodes, a.eval_seed, a.option, run / "train.log"
-    )
+    raw, log = run / ".eval-raw.json", run / "train.log"
+    if a.cli:
+        result = _evaluate_cli(a.cli, run / "model.onnx", raw, a.eval_episodes, a.eval_seed, log)
+    else:
+        result = _evaluate(str(run / "model.pt"), raw, a.eval_episodes, a.eval_seed, a.option, log)
     # The training's wall time (how long a seed takes, on whatever else shared the machine: see --jobs).
     result["train_wall_s"] = round(wall, 1)
     result["runner"] = key
@@ -193,6 +216,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     p.add_argument("--title", default="PPO recipe", help="what trained the seeds, for the plot's title")
     p.add_argument(
+        "--cli",
+        metavar="PATH",
+        help="train with the Rust learner: PATH is the chopperscape command line (PATH train; only --preset passed)",
+    )
+    p.add_argument(
         "--steps", type=int, default=None, help=f"env steps per seed (default the preset's, else {DEFAULT_STEPS:,})"
     )
     p.add_argument("--jobs", type=int, default=None, help="trainings at once (default: one per core)")
@@ -215,6 +243,20 @@ def main(argv: list[str] | None = None) -> int:
         return run_command(lambda: summarise_folder(a))
     if a.seeds is None or a.out is None:
         p.error("--seeds and --out are required (or --summarise DIR)")
+    if a.cli is not None:
+        if not (os.path.isfile(a.cli) and os.access(a.cli, os.X_OK)):
+            p.error(
+                f"--cli {a.cli}: not an executable file (the chopperscape command line: target/release/chopperscape)"
+            )
+        passed = forward + [x for o in a.option for x in ("--option", o)]
+        if not (
+            passed == []
+            or (len(passed) == 2 and passed[0] == "--preset")
+            or re.fullmatch(r"--preset=\S+", " ".join(passed))
+        ):
+            p.error(
+                f"--cli trains a preset of the Rust learner: only --preset NAME is passed on, not {' '.join(passed)}"
+            )
     if any(f == "--seed" or f.startswith("--seed=") for f in forward):
         p.error("--seed: give the training seeds with --seeds")
     for stop in ("--minutes", "--until"):
@@ -249,6 +291,8 @@ def main(argv: list[str] | None = None) -> int:
             p.error(str(err))
     # What makes two runs of a seed the same run: a stored evaluation counts only if all of it matches.
     key = {"steps": a.steps, "train_args": forward, "episodes": a.eval_episodes, "seed": a.eval_seed}
+    if a.cli:
+        key["trainer"] = "rust"
     try:
         a.out.mkdir(parents=True, exist_ok=True)
     except OSError as e:

@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use chopperscape_learn::export::{ExportInfo, python_json, to_onnx};
+use chopperscape_learn::phases::{Laps, NoLaps, PHASES, Phase};
 use chopperscape_learn::progress::{COLUMNS, Row, header};
 use chopperscape_learn::recipe::PRESETS;
 use chopperscape_learn::{Learner, Recipe, State};
@@ -70,6 +71,42 @@ pub struct TrainArgs {
     /// Threads that step the envs
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
     pub env_threads: u16,
+    /// Time the update's phases (Python's: env, obs_norm, forward, ...) and print where the time went: a table
+    /// on standard error and a "phases" object (seconds per phase) in the closing JSON line
+    #[arg(long)]
+    pub phases: bool,
+}
+
+/// The wall time of each [`Phase`], summed over a run, from the learner's laps.
+struct Stopwatch {
+    last: Instant,
+    seconds: [f64; PHASES.len()],
+}
+
+impl Stopwatch {
+    fn new() -> Stopwatch {
+        Stopwatch { last: Instant::now(), seconds: [0.0; PHASES.len()] }
+    }
+
+    /// The table: each phase's seconds, microseconds a decision and share of the timed time.
+    fn table(&self, decisions: u64) -> String {
+        let total: f64 = self.seconds.iter().sum();
+        let mut text = format!("{:<16}{:>10}{:>14}{:>8}\n", "phase", "seconds", "µs/decision", "share");
+        for (name, s) in PHASES.iter().zip(self.seconds) {
+            let per = s * 1e6 / decisions.max(1) as f64;
+            text += &format!("{name:<16}{s:>10.2}{per:>14.2}{:>7.1}%\n", 100.0 * s / total.max(1e-12));
+        }
+        let per = total * 1e6 / decisions.max(1) as f64;
+        text + &format!("{:<16}{total:>10.2}{per:>14.2}{:>7.1}%", "total", 100.0)
+    }
+}
+
+impl Laps for Stopwatch {
+    fn lap(&mut self, phase: Phase) {
+        let now = Instant::now();
+        self.seconds[phase as usize] += (now - self.last).as_secs_f64();
+        self.last = now;
+    }
 }
 
 fn positive_minutes(s: &str) -> Result<f64, String> {
@@ -200,6 +237,7 @@ pub fn run(args: TrainArgs) -> Result<ExitCode> {
     let model = out.join("model.onnx");
     let total = learner.recipe().total_steps;
     let mut stopped = None;
+    let mut watch = Stopwatch::new();
     while !learner.finished() {
         if let Some(signal) = interrupt::pending() {
             stopped = Some(signal);
@@ -208,7 +246,9 @@ pub fn run(args: TrainArgs) -> Result<ExitCode> {
         if args.minutes.is_some_and(|m| start.elapsed().as_secs_f64() >= m * 60.0) {
             break;
         }
-        let mut row = match learner.update(0.0) {
+        let laps: &mut dyn Laps = if args.phases { &mut watch } else { &mut NoLaps };
+        laps.lap(Phase::Logging); // what came since the last update: the checks above, the previous row's writing
+        let mut row = match learner.update_laps(0.0, laps) {
             Ok(row) => row,
             Err(e) => {
                 anyhow::bail!("training stopped: {e}; the model saved last is kept in {}", model.display())
@@ -224,6 +264,7 @@ pub fn run(args: TrainArgs) -> Result<ExitCode> {
         }
     }
     save(&learner, &out, wall(&start))?;
+    watch.lap(Phase::Logging);
     let secs = start.elapsed().as_secs_f64();
     let decisions = learner.env_steps() - steps_start;
     note!(
@@ -236,7 +277,14 @@ pub fn run(args: TrainArgs) -> Result<ExitCode> {
         note!("stopped: the model reached so far ({} decisions) is saved in {}", learner.env_steps(), model.display());
         return Ok(ExitCode::from(u8::try_from(128 + signal).unwrap_or(1)));
     }
-    let line = serde_json::json!({"model": model, "progress": out.join("progress.csv")});
+    let mut line = serde_json::json!({"model": model, "progress": out.join("progress.csv")});
+    if args.phases {
+        note!("{}", watch.table(decisions));
+        let seconds: serde_json::Map<_, _> =
+            PHASES.iter().zip(watch.seconds).map(|(k, v)| ((*k).to_string(), serde_json::json!(v))).collect();
+        line["phases"] = serde_json::Value::Object(seconds);
+        line["decisions"] = serde_json::json!(decisions);
+    }
     say!("{line}")?;
     Ok(ExitCode::SUCCESS)
 }
