@@ -1,12 +1,20 @@
 // The Train control's worker: the Rust learner (crates/learn, the `fast` recipe, compiled to wasm) learning in a
 // Web Worker, so that the page never waits for it. Messages in: {type: "start", seed, numEnvs, numSteps,
-// totalSteps} (a fresh run the first time, then it goes on), {type: "stop"}, {type: "onnx"}. Out: {type: "row",
-// row (a progress.csv line), envSteps, onnx (the current policy), decisionsPerSec}, {type: "onnx", bytes},
-// {type: "finished"}, {type: "error", message}.
+// totalSteps, evalEvery} (a fresh run the first time, then it goes on), {type: "stop"}, {type: "onnx"}. Out:
+// {type: "row", row (a progress.csv line), envSteps, onnx (the current policy), decisionsPerSec}, {type: "eval",
+// envSteps, mean} (the greedy policy on EVAL_EPISODES held-out episodes, every `evalEvery` updates and at the end),
+// {type: "heuristic", mean} (the heuristic on the same episodes, once), {type: "onnx", bytes}, {type: "finished"},
+// {type: "error", message}.
 import init, { Trainer } from "./pkg/chopperscape_web.js";
+
+// The held-out episodes of the evaluation: seeds 1,000,000 to 1,000,019 (Python's `evaluate` plays its first 20).
+const EVAL_EPISODES = 20;
+const EVAL_SEED = 1000000;
 
 const ready = init();
 let trainer = null;
+let evalEvery = 10;
+let updates = 0;
 let running = false;
 let wall = 0; // seconds spent learning (stopped time not counted)
 
@@ -14,10 +22,15 @@ function post(message, transfer = []) {
   self.postMessage(message, transfer);
 }
 
+function evaluate() {
+  post({ type: "eval", envSteps: trainer.env_steps(), mean: trainer.evaluate(EVAL_EPISODES, EVAL_SEED) });
+}
+
 async function loop() {
   while (running) {
     if (trainer.finished()) {
       running = false;
+      if (updates % evalEvery !== 0) evaluate();
       post({ type: "finished" });
       return;
     }
@@ -36,6 +49,16 @@ async function loop() {
     const envSteps = trainer.env_steps();
     const onnx = trainer.onnx();
     post({ type: "row", row, envSteps, onnx, decisionsPerSec: (envSteps - before) / seconds }, [onnx.buffer]);
+    updates += 1;
+    if (updates % evalEvery === 0) {
+      try {
+        evaluate();
+      } catch (err) {
+        running = false;
+        post({ type: "error", message: String(err) });
+        return;
+      }
+    }
     // Let a "stop" message in between updates.
     await new Promise((ok) => setTimeout(ok, 0));
   }
@@ -48,7 +71,9 @@ self.onmessage = async (event) => {
     if (m.type === "start") {
       if (!trainer) {
         trainer = new Trainer(m.seed ?? 0, m.numEnvs ?? 0, m.numSteps ?? 0, m.totalSteps ?? 0);
+        evalEvery = m.evalEvery > 0 ? m.evalEvery : 10;
         post({ type: "header", header: Trainer.csv_header() });
+        post({ type: "heuristic", mean: trainer.heuristic(EVAL_EPISODES, EVAL_SEED) });
       }
       if (!running) {
         running = true;

@@ -5,6 +5,7 @@
 //! - [`Recipe`]: Python's `Recipe` and the presets it trains (`fast`, `features`);
 //! - [`Learner`]: one update per call ([`Learner::update`], a [`progress::Row`] of the curve), its
 //!   [`State`] for `--resume`;
+//! - [`evaluate`]: greedy play on held-out seeds ([`Learner::evaluate`]) and the heuristic on the same episodes;
 //! - [`phases`]: where an update's time goes ([`Learner::update_laps`]), in Python's phases;
 //! - [`export::to_onnx`]: the policy as the ONNX file `chopperscape-policy` plays;
 //! - the parts, each tested against hand-computed values and Python's on the same batch (`tests/golden.rs`):
@@ -12,6 +13,7 @@
 
 pub mod adam;
 pub mod agent;
+pub mod evaluate;
 pub mod export;
 pub mod gae;
 mod learner;
@@ -50,7 +52,7 @@ pub enum LearnError {
 }
 
 impl LearnError {
-    fn env(e: impl std::fmt::Display) -> LearnError {
+    pub(crate) fn env(e: impl std::fmt::Display) -> LearnError {
         LearnError::Env(e.to_string())
     }
 }

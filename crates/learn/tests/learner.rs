@@ -86,3 +86,34 @@ fn timed_updates_are_the_same_updates_and_lap_every_phase_but_logging() {
     let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
     assert_eq!(line, format!("PHASES = ({})", quoted.join(", ")));
 }
+
+#[test]
+fn the_evaluation_plays_the_exports_episodes_and_the_heuristic_the_same_seeds() {
+    use chopperscape_learn::evaluate::{heuristic, mean};
+    let mut learner = Learner::new(small()).unwrap();
+    learner.update(0.0).unwrap();
+    let ours = learner.evaluate(3, 1_000_000).unwrap();
+    assert_eq!(ours.iter().map(|e| e.seed).collect::<Vec<_>>(), [1_000_000, 1_000_001, 1_000_002]);
+    // The same episodes through the exported policy, played by hand.
+    let info = ExportInfo { env_options: python_json(&small().env_options), train_seeds: vec![(0, 8)] };
+    let mut policy = Policy::from_bytes(&to_onnx(learner.agent(), learner.obs_norm(), &info).unwrap()).unwrap();
+    let mut config = Config::features();
+    config.set("frame_skip", "4").unwrap();
+    for e in &ours {
+        let mut env = chopperscape::ChopperScape::new(config.clone()).unwrap();
+        let mut obs = env.reset(Some(e.seed)).0;
+        let (mut ret, mut steps) = (0.0, 0);
+        loop {
+            let step = env.step(policy.act(&obs).unwrap() as i64).unwrap();
+            (ret, steps) = (ret + f64::from(step.reward), steps + 1);
+            if step.terminated || step.truncated {
+                break;
+            }
+            obs = step.observation;
+        }
+        assert_eq!((e.ret, e.steps), (ret, steps), "seed {}", e.seed);
+    }
+    let h = heuristic(&config, 3, 1_000_000).unwrap();
+    assert!(h.iter().all(|e| e.steps > 0) && mean(&h) > mean(&ours), "{h:?} vs {ours:?}");
+    assert_eq!(h, heuristic(&config, 3, 1_000_000).unwrap(), "deterministic");
+}

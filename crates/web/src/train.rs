@@ -3,9 +3,10 @@
 //! update and gives its row of the learning curve; [`Trainer::onnx`] is the current policy in the export's
 //! format, which the page flies (`Game.with_policy`) and offers for download.
 
+use chopperscape_learn::evaluate::{heuristic, mean};
 use chopperscape_learn::export::{ExportInfo, python_json, to_onnx};
 use chopperscape_learn::progress::header;
-use chopperscape_learn::{Learner, Recipe};
+use chopperscape_learn::{Learner, Recipe, env_config};
 use wasm_bindgen::prelude::*;
 
 /// A PPO run of the `fast` recipe in memory.
@@ -47,6 +48,18 @@ impl Trainer {
     /// The header of the learning-curve CSV (Python's columns).
     pub fn csv_header() -> String {
         header()
+    }
+
+    /// The current policy's mean return, greedy, on `episodes` episodes from seed `first_seed` under the recipe's
+    /// rules: the held-out evaluation the page draws beside the training curve.
+    pub fn evaluate(&self, episodes: u32, first_seed: f64) -> Result<f64, JsError> {
+        Ok(mean(&self.learner.evaluate(u64::from(episodes), first_seed as u64).map_err(js)?))
+    }
+
+    /// The heuristic policy's mean return on the same episodes, under this run's rules.
+    pub fn heuristic(&self, episodes: u32, first_seed: f64) -> Result<f64, JsError> {
+        let config = env_config(self.learner.recipe()).map_err(js)?;
+        Ok(mean(&heuristic(&config, u64::from(episodes), first_seed as u64).map_err(js)?))
     }
 
     /// Decisions learned from so far.
