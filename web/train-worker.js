@@ -22,8 +22,16 @@ function post(message, transfer = []) {
   self.postMessage(message, transfer);
 }
 
+// Posts the greedy policy's evaluation; if it fails, posts the error and stops the run (returns false).
 function evaluate() {
-  post({ type: "eval", envSteps: trainer.env_steps(), mean: trainer.evaluate(EVAL_EPISODES, EVAL_SEED) });
+  try {
+    post({ type: "eval", envSteps: trainer.env_steps(), mean: trainer.evaluate(EVAL_EPISODES, EVAL_SEED) });
+    return true;
+  } catch (err) {
+    running = false;
+    post({ type: "error", message: String(err) });
+    return false;
+  }
 }
 
 async function loop() {
@@ -50,15 +58,7 @@ async function loop() {
     const onnx = trainer.onnx();
     post({ type: "row", row, envSteps, onnx, decisionsPerSec: (envSteps - before) / seconds }, [onnx.buffer]);
     updates += 1;
-    if (updates % evalEvery === 0) {
-      try {
-        evaluate();
-      } catch (err) {
-        running = false;
-        post({ type: "error", message: String(err) });
-        return;
-      }
-    }
+    if (updates % evalEvery === 0 && !evaluate()) return;
     // Let a "stop" message in between updates.
     await new Promise((ok) => setTimeout(ok, 0));
   }

@@ -220,6 +220,18 @@ fn a_reshape_to_a_shape_that_cannot_hold_its_input_is_refused() {
     // flattened back was accepted, and played (issue 45).
     let back = node("Reshape", &["x", "flat"], "y", vec![]);
     let slice = node("Slice", &["y", "starts", "ends", "axes"], "logits", vec![]);
+    // The observation reshaped to `shape`, flattened back and sliced to the five logits.
+    let reshaped = |shape: &[i64]| {
+        let nodes = vec![node("Reshape", &["obs", "s"], "x", vec![]), back.clone(), slice.clone()];
+        let weights = vec![
+            int64s("s", shape),
+            int64s("flat", &[1, -1]),
+            int64s("starts", &[0]),
+            int64s("ends", &[5]),
+            int64s("axes", &[1]),
+        ];
+        model(nodes, weights)
+    };
     for (shape, message) in [
         (vec![1 << 40, 1 << 40], "more than the 67108864 elements"),
         (vec![1 << 32, 1 << 32], "more than the 67108864 elements"),
@@ -230,15 +242,7 @@ fn a_reshape_to_a_shape_that_cannot_hold_its_input_is_refused() {
         (vec![-1, -1], "more than one size to infer"),
         (vec![-2, -23], "a size below -1"),
     ] {
-        let nodes = vec![node("Reshape", &["obs", "s"], "x", vec![]), back.clone(), slice.clone()];
-        let weights = vec![
-            int64s("s", &shape),
-            int64s("flat", &[1, -1]),
-            int64s("starts", &[0]),
-            int64s("ends", &[5]),
-            int64s("axes", &[1]),
-        ];
-        let err = refused(&format!("reshape to {shape:?}"), &model(nodes, weights)).to_string();
+        let err = refused(&format!("reshape to {shape:?}"), &reshaped(&shape)).to_string();
         assert!(err.contains("operator \"Reshape\" has the shape") && err.contains(message), "{shape:?}: {err}");
     }
     // A constant reshaped to a shape that cannot hold it, and the shapes that can: the observation as [1, 46], [2, 23]
@@ -248,15 +252,7 @@ fn a_reshape_to_a_shape_that_cannot_hold_its_input_is_refused() {
     let err = refused("constant reshape", &model(nodes, weights)).to_string();
     assert!(err.contains("which cannot hold its input's 5 elements"), "{err}");
     for shape in [vec![1i64, 46], vec![2, 23], vec![-1, 46], vec![0, 46]] {
-        let nodes = vec![node("Reshape", &["obs", "s"], "x", vec![]), back.clone(), slice.clone()];
-        let weights = vec![
-            int64s("s", &shape),
-            int64s("flat", &[1, -1]),
-            int64s("starts", &[0]),
-            int64s("ends", &[5]),
-            int64s("axes", &[1]),
-        ];
-        Policy::from_bytes(&model(nodes, weights)).unwrap_or_else(|e| panic!("{shape:?}: {e}"));
+        Policy::from_bytes(&reshaped(&shape)).unwrap_or_else(|e| panic!("{shape:?}: {e}"));
     }
 }
 

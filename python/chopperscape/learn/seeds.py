@@ -197,6 +197,15 @@ def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
     return result
 
 
+def _only_a_preset(flags: list[str]) -> bool:
+    """Whether `flags` is nothing, `--preset NAME` or `--preset=NAME`: all the Rust learner takes through `--cli`."""
+    return (
+        flags == []
+        or (len(flags) == 2 and flags[0] == "--preset")
+        or (len(flags) == 1 and re.fullmatch(r"--preset=\S+", flags[0]) is not None)
+    )
+
+
 def main(argv: list[str] | None = None) -> int:
     from .episodes import MAX_EPISODES
     from .recipe import DEFAULT_STEPS, MAX_TOTAL_STEPS
@@ -249,11 +258,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"--cli {a.cli}: not an executable file (the chopperscape command line: target/release/chopperscape)"
             )
         passed = forward + [x for o in a.option for x in ("--option", o)]
-        if not (
-            passed == []
-            or (len(passed) == 2 and passed[0] == "--preset")
-            or re.fullmatch(r"--preset=\S+", " ".join(passed))
-        ):
+        if not _only_a_preset(passed):
             p.error(
                 f"--cli trains a preset of the Rust learner: only --preset NAME is passed on, not {' '.join(passed)}"
             )
