@@ -84,6 +84,7 @@ def _rllib_ppo() -> dict[str, Any]:
         "clip": r.clip_coef,
         "kl-coeff": 0.0,
         "hidden": f"{r.hidden},{r.hidden}",
+        "init": "orthogonal",
         "env-config": {"obs_type": "features", **dict(r.env_options)},
     }
 

@@ -29,14 +29,16 @@ DEFAULTS: dict[str, Any] = {
     # RLlib's own: PPO's clip 0.3 and its adaptive KL penalty, starting at 0.2.
     "clip": 0.3,
     "kl_coeff": 0.2,
+    # RLlib's own: torch's default initialisation of its module.
+    "init": "torch",
 }
 
 
 def recipe_settings(recipe: Any, steps: int, env_runners: int) -> dict[str, Any]:
     """The settings of a features recipe (:class:`chopperscape.learn.recipe.Recipe`, read by attribute) as this
     trainer's flags: its games split over `env_runners` runners (the driver's, with 0), one batch of games x steps,
-    its minibatches, epochs, lr, gamma, lambda, entropy, clip, two hidden layers of its width, the step budget
-    `steps` and its env options, and no KL penalty (the recipe has none). `ValueError` if the games do not split
+    its minibatches, epochs, lr, gamma, lambda, entropy, clip, two hidden layers of its width, its orthogonal
+    initialisation, the step budget `steps` and its env options, and no KL penalty (the recipe has none). `ValueError` if the games do not split
     evenly."""
     r = recipe
     runners = max(env_runners, 1)
@@ -55,6 +57,7 @@ def recipe_settings(recipe: Any, steps: int, env_runners: int) -> dict[str, Any]
         "clip": r.clip_coef,
         "kl_coeff": 0.0,
         "hidden": f"{r.hidden},{r.hidden}",
+        "init": "orthogonal",
         "steps": steps,
         "preset_env_options": dict(r.env_options),
     }
@@ -178,6 +181,13 @@ def _ppo_flags(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--hidden", default=None, help="hidden layer sizes of the policy and value networks (default 128,128)"
+    )
+    p.add_argument(
+        "--init",
+        choices=("torch", "orthogonal"),
+        default=None,
+        help="the module's initial weights: torch's defaults (RLlib's own, the default) or the recipe's orthogonal "
+        "ones (gain sqrt 2, 0.01 in the policy head, 1 in the value head, zero biases; the preset's)",
     )
     p.add_argument(
         "--torch-threads",

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from typing import Any
 
 from . import flags
+from .weights import initialise
 
 #: Episodes the mean and std of each row are taken over.
 WINDOW = 100
@@ -54,7 +55,7 @@ CONSTANTS: dict[str, Any] = {
 SETTINGS = (
     "env_runners", "envs_per_runner", "cpus_per_runner", "native", "env_config", "seed", "train_batch_size",
     "minibatch_size", "epochs", "lr", "lr_floor", "anneal_lr", "steps", "minutes", "iterations", "gamma", "lambda_",
-    "entropy", "clip", "kl_coeff", "norm_reward", "hidden", "torch_threads", "sample_timeout", "restore",
+    "entropy", "clip", "kl_coeff", "norm_reward", "hidden", "init", "torch_threads", "sample_timeout", "restore",
 )  # fmt: skip
 #: An evaluation hook: `(algo, args) -> JSON report` (python/examples/rllib_ppo.py's plays greedy episodes).
 Evaluate = Callable[[Any, argparse.Namespace], dict[str, Any]]
@@ -280,6 +281,8 @@ def main(
         raise SystemExit(f"error: {e}") from None
     connect(args)
     algo = build_config(args).build_algo()
+    if not args.restore:  # a restore brings its own weights
+        initialise(algo, args.init)
     summary: dict[str, Any] = {
         "native": args.native,
         "env_runners": args.env_runners,
