@@ -161,12 +161,22 @@ def add_parser(sub: Any) -> None:
     r.add_argument("--results", metavar="DIR", help="folder of the results files (default: docs/bench/results)")
     r.add_argument("--steps", help="the budget in decisions (default the row's; the row's name says it)")
     r.add_argument("--python", default=sys.executable, help="the interpreter of the trainers and the evaluation")
-    r.add_argument("--rllib-python", help="the interpreter of the RLlib trainer (default .venv-rllib/bin/python)")
+    r.add_argument("--rllib-python", help="the interpreter of the RLlib trainer (default: .venv-rllib/bin/python of the checkout, or of the current folder)")
     r.add_argument("--dry-run", action="store_true", help="print each command (shell-quoted) instead of running it")
 
 
 def _checkout() -> Path:
     return Path(__file__).resolve().parents[3]
+
+
+def _rllib_python(fallback: str) -> str:
+    """The RLlib trainer's interpreter: `.venv-rllib` of the checkout this package is in, or of the current folder
+    (an installed package's checkout is unknown), else `fallback`."""
+    for root in (_checkout(), Path.cwd()):
+        candidate = root / ".venv-rllib" / "bin" / "python"
+        if candidate.is_file():
+            return str(candidate)
+    return fallback
 
 
 def train_command(row: Row, mode: str, seed: int, steps: int, out: Path, py: str, rllib_py: str) -> list[str]:
@@ -278,9 +288,7 @@ def main(a: argparse.Namespace) -> int:
     results_dir = Path(a.results) if a.results else _checkout() / "docs" / "bench" / "results"
     if a.results is None and not results_dir.is_dir():
         raise ValueError("--results: give the folder of the results files (this package is not in a checkout)")
-    rllib_py = a.rllib_python or str(_checkout() / ".venv-rllib" / "bin" / "python")
-    if row.trainer == "rllib-ppo" and a.rllib_python is None and not Path(rllib_py).is_file():
-        rllib_py = a.python
+    rllib_py = a.rllib_python or _rllib_python(a.python)
     name, runs = row.name(steps), Path(a.runs)
     for seed in seeds:
         out, results = runs / f"seed-{seed}", results_dir / f"{a.mode}.{row.key}.seed{seed}.json"
@@ -313,6 +321,7 @@ def main(a: argparse.Namespace) -> int:
                 continue
             if not done:
                 log = runs / f"seed-{seed}.log"
+                out.mkdir(parents=True, exist_ok=True)  # the RLlib trainer writes into it and does not make it
                 code = _run(train, log)
                 if code != 0:
                     return _fail(f"seed {seed}: training", code, log)
