@@ -145,6 +145,47 @@ def test_example_preset_is_the_trainers_preset_in_rllibs_terms():
     plain = example.parse_args([])
     assert (plain.envs_per_runner, plain.train_batch_size, plain.lr, plain.steps) == (16, 8192, 3e-4, None)
     assert (plain.clip, plain.kl_coeff) == (0.3, 0.2)  # RLlib's own
+    assert (a.init, plain.init) == ("orthogonal", "torch")  # the recipe's initialisation; RLlib's own
+
+
+def test_orthogonal_init_gives_rllibs_ppo_module_the_recipes_gains_by_head():
+    """`--init orthogonal` re-initialises RLlib's own PPO module (its layer names are what the gains are chosen by):
+    orthogonal rows of norm √2 in the encoders, 0.01 in the policy head and 1 in the value head, zero biases, the
+    same weights for the same torch seed."""
+    import gymnasium as gym
+    import torch
+    from ray.rllib.algorithms.ppo.ppo_catalog import PPOCatalog
+    from ray.rllib.algorithms.ppo.torch.default_ppo_torch_rl_module import DefaultPPOTorchRLModule
+    from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+
+    from chopperscape.integrations.rllib import weights
+
+    def module():
+        return DefaultPPOTorchRLModule(
+            observation_space=gym.spaces.Box(-1, 1, (46,), np.float32),
+            action_space=gym.spaces.Discrete(5),
+            model_config=DefaultModelConfig(fcnet_hiddens=[16, 16], vf_share_layers=False),
+            catalog_class=PPOCatalog,
+        )
+
+    torch.manual_seed(3)
+    m = module()
+    assert weights.orthogonal(m) == 6
+    layers = {n: x for n, x in m.named_modules() if isinstance(x, torch.nn.Linear)}
+    assert {"pi.net.mlp.0", "vf.net.mlp.0"} <= set(layers)
+    for name, layer in layers.items():
+        g = {"pi": 0.01, "vf": 1.0}.get(name.split(".")[0], 2**0.5)
+        w = layer.weight.detach().double()
+        small = w @ w.T if w.shape[0] <= w.shape[1] else w.T @ w
+        np.testing.assert_allclose(small.numpy(), g * g * np.eye(small.shape[0]), atol=1e-5, err_msg=name)
+        assert not layer.bias.detach().any(), name
+    torch.manual_seed(3)
+    again = module()
+    weights.orthogonal(again)
+    for (n, x), (_, y) in zip(m.state_dict().items(), again.state_dict().items(), strict=True):
+        assert torch.equal(x, y), n
+    with pytest.raises(ValueError, match="init must be one of torch, orthogonal, got 'xavier'"):
+        weights.initialise(None, "xavier")
 
 
 def test_example_config_carries_the_presets_clip_kl_and_learning_rate_schedule():
@@ -435,6 +476,8 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         "first",
         "--iterations",
         "2",
+        "--init",
+        "orthogonal",
         "--checkpoint",
         str(tmp_path / "ck"),
         "--eval-episodes",
@@ -447,6 +490,7 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         str(tmp_path / "policy.onnx"),
     )
     assert len(rows) == 2 == summary["iterations"]
+    assert summary["initialised_layers"] == 6 and summary["settings"]["init"] == "orthogonal"
     steps = [int(r["env_steps"]) for r in rows]
     assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
     # Both runners sampled, each its own process, none of them the driver.
@@ -464,6 +508,7 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         ray_cluster, tmp_path, "second", "--iterations", "1", "--python-envs", "--restore", str(tmp_path / "ck")
     )
     assert restored["restored_weights_sha256"] == summary["weights_sha256"]
+    assert restored["initialised_layers"] == 0  # a restore keeps its weights
     assert restored["restored_env_steps"] == summary["env_steps"]
     assert int(rows2[0]["env_steps"]) >= summary["env_steps"] + 400  # the counters continue
     assert sum(restored["steps_per_runner"].values()) == restored["env_steps"] - summary["env_steps"]

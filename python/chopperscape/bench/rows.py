@@ -161,7 +161,11 @@ def add_parser(sub: Any) -> None:
     r.add_argument("--results", metavar="DIR", help="folder of the results files (default: docs/bench/results)")
     r.add_argument("--steps", help="the budget in decisions (default the row's; the row's name says it)")
     r.add_argument("--python", default=sys.executable, help="the interpreter of the trainers and the evaluation")
-    r.add_argument("--rllib-python", help="the interpreter of the RLlib trainer (default: .venv-rllib/bin/python of the checkout, or of the current folder)")
+    r.add_argument(
+        "--rllib-python",
+        help="the interpreter of the RLlib trainer (default: .venv-rllib/bin/python of the checkout, or of the "
+        "current folder)",
+    )
     r.add_argument("--dry-run", action="store_true", help="print each command (shell-quoted) instead of running it")
 
 

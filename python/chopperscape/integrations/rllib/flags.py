@@ -38,8 +38,8 @@ def recipe_settings(recipe: Any, steps: int, env_runners: int) -> dict[str, Any]
     """The settings of a features recipe (:class:`chopperscape.learn.recipe.Recipe`, read by attribute) as this
     trainer's flags: its games split over `env_runners` runners (the driver's, with 0), one batch of games x steps,
     its minibatches, epochs, lr, gamma, lambda, entropy, clip, two hidden layers of its width, its orthogonal
-    initialisation, the step budget `steps` and its env options, and no KL penalty (the recipe has none). `ValueError` if the games do not split
-    evenly."""
+    initialisation, the step budget `steps` and its env options, and no KL penalty (the recipe has none).
+    `ValueError` if the games do not split evenly."""
     r = recipe
     runners = max(env_runners, 1)
     if r.num_envs % runners:

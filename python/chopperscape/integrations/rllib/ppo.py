@@ -281,9 +281,10 @@ def main(
         raise SystemExit(f"error: {e}") from None
     connect(args)
     algo = build_config(args).build_algo()
-    if not args.restore:  # a restore brings its own weights
-        initialise(algo, args.init)
+    # A restore brings its own weights.
+    initialised = 0 if args.restore else initialise(algo, args.init)
     summary: dict[str, Any] = {
+        "initialised_layers": initialised,
         "native": args.native,
         "env_runners": args.env_runners,
         "envs_per_runner": args.envs_per_runner,
