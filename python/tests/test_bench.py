@@ -461,8 +461,7 @@ def test_bench_row_trains_evaluates_and_records_at_a_smoke_budget(tmp_path):
     with its results gone the trained seed is evaluated again without training."""
     from chopperscape.bench import record
 
-    runs, out = tmp_path / "runs", tmp_path / "results"
-    out.mkdir()
+    runs, out = tmp_path / "runs", tmp_path / "results" / "new"  # a results folder that does not exist yet is made
     args = ["fast", "--mode", "sticky-v0", "--seeds", "4", "--runs", str(runs), "--steps", "16384"]
     command = [sys.executable, "-m", "chopperscape.bench", "row", *args, "--results", str(out)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=900)

@@ -599,3 +599,21 @@ def test_the_bench_rows_rllib_flags_are_the_fast_preset_on_one_runner(tmp_path):
     assert ours == theirs
     with pytest.raises(SystemExit):
         flags.parse_args(["--preset", "fast"])  # the package's trainer has no presets
+
+
+def test_bench_row_trains_an_rllib_seed_from_the_recipes_initialisation_and_evaluates_it(tmp_path):
+    """`bench row rllib-ppo` at one iteration: the run folder and the results folder are made, the trainer starts
+    from the recipe's orthogonal weights (6 layers), and the results file records the runner's seed range and the
+    `--init` its trainer was given."""
+    from chopperscape.bench import results
+
+    runs, out = tmp_path / "runs", tmp_path / "results" / "new"
+    command = [sys.executable, "-m", "chopperscape.bench", "row", "rllib-ppo", "--mode", "full-v0", "--seeds", "2"]
+    command += ["--runs", str(runs), "--results", str(out), "--steps", "16384", "--rllib-python", sys.executable]
+    env = {**os.environ, "RAY_worker_niceness": "0"}
+    done = subprocess.run(command, capture_output=True, text=True, timeout=900, cwd=ROOT, env=env)
+    assert done.returncode == 0, done.stderr + (runs / "seed-2.log").read_text()
+    summary = json.loads((runs / "seed-2" / "summary.json").read_text())
+    assert summary["initialised_layers"] == 6 and summary["settings"]["init"] == "orthogonal"
+    doc = results.load(out / "full-v0.rllib-ppo.seed2.json")
+    assert doc["training"]["train_seeds"] == [[3 * 2**20, 128]] and doc["training"]["settings"]["init"] == "orthogonal"

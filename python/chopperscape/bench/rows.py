@@ -292,6 +292,11 @@ def main(a: argparse.Namespace) -> int:
     results_dir = Path(a.results) if a.results else _checkout() / "docs" / "bench" / "results"
     if a.results is None and not results_dir.is_dir():
         raise ValueError("--results: give the folder of the results files (this package is not in a checkout)")
+    if not a.dry_run:
+        try:
+            results_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise ValueError(f"--results {str(results_dir)!r}: cannot make the folder ({e.strerror})") from None
     rllib_py = a.rllib_python or _rllib_python(a.python)
     name, runs = row.name(steps), Path(a.runs)
     for seed in seeds:
