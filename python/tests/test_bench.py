@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -577,3 +578,33 @@ def test_a_rows_training_record_is_what_its_trainer_wrote(tmp_path):
     (tmp_path / "summary.json").write_text(json.dumps({**made, "train_seeds": [[999_990, 64]]}))
     with pytest.raises(ValueError, match="overlap the evaluation seeds"):
         rows.training_record(rows.ROWS["rllib-ppo"], "full-v0", 3, 500, tmp_path, ["rpy"])
+
+
+def test_an_installed_package_run_in_its_checkout_records_the_checkouts_commit(tmp_path):
+    """A wheel installed in a venv is tracked by no checkout: run from this checkout, whose `python/chopperscape`
+    modules it holds byte for byte, it records the checkout's HEAD; with one module differing (an older wheel), the
+    package version."""
+    import chopperscape
+
+    installed = tmp_path / "site" / "chopperscape"
+    shutil.copytree(Path(chopperscape.__file__).parent, installed)
+    for module in (ROOT / "python" / "chopperscape").rglob("*.py"):  # the checkout's sources, as its wheel has them
+        target = installed / module.relative_to(ROOT / "python" / "chopperscape")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(module, target)
+    code = "from chopperscape.bench import record; print(record.__file__); print(record.project_commit()[0])"
+
+    def commit(cwd: Path) -> list[str]:
+        env = {**os.environ, "PYTHONPATH": str(installed.parent)}
+        done = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, cwd=cwd, env=env, timeout=60
+        )
+        assert done.returncode == 0, done.stderr
+        return done.stdout.split()
+
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    where, sha = commit(ROOT)
+    assert where == str(installed / "bench" / "record.py") and sha == head
+    assert commit(tmp_path)[1] == chopperscape.__version__  # not run in a checkout
+    (installed / "bench" / "rows.py").write_text("# an older wheel\n")
+    assert commit(ROOT)[1] == chopperscape.__version__

@@ -107,6 +107,10 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--lr-floor", "-0.5"], "--lr-floor must be in [0, 1), got -0.5"),
         (["--preset", "fast", "--env-runners", "3"], "--preset fast: its 128 games do not split over 3 runners evenly"),
         (["--export", "/"], "--export '/' is a folder: give the ONNX file to write"),
+        (["--adam-eps", "0"], "--adam-eps must be a number in (0, 1), got 0.0"),
+        (["--adam-eps", "nan"], "--adam-eps must be a number in (0, 1), got nan"),
+        (["--adam-eps", "1e-5", "--no-norm-reward"], "--adam-eps is set in the reward-scaling learner"),
+        (["--init", "xavier"], "argument --init: invalid choice: 'xavier'"),
     ],
 )
 def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
@@ -206,6 +210,9 @@ def test_example_config_carries_the_presets_clip_kl_and_learning_rate_schedule()
     assert old.lr == [[0, 3e-4], [5_000_000, 0.0]]
     assert (old.clip_param, old.use_kl_loss, old.kl_coeff) == (0.3, True, 0.2)
     assert example.build_config(example.parse_args([])).lr == 3e-4  # no budget, no schedule
+    # Adam's epsilon reaches the learner's settings: torch's default (RLlib's own) unless --adam-eps gives one.
+    assert example.build_config(example.parse_args([])).learner_config_dict["adam_eps"] is None
+    assert example.build_config(example.parse_args(["--adam-eps", "1e-5"])).learner_config_dict["adam_eps"] == 1e-5
 
 
 @pytest.mark.parametrize(
@@ -478,6 +485,8 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
         "2",
         "--init",
         "orthogonal",
+        "--adam-eps",
+        "1e-5",
         "--checkpoint",
         str(tmp_path / "ck"),
         "--eval-episodes",
@@ -491,6 +500,7 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     )
     assert len(rows) == 2 == summary["iterations"]
     assert summary["initialised_layers"] == 6 and summary["settings"]["init"] == "orthogonal"
+    assert summary["settings"]["adam_eps"] == 1e-5
     steps = [int(r["env_steps"]) for r in rows]
     assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
     # Both runners sampled, each its own process, none of them the driver.
@@ -615,5 +625,6 @@ def test_bench_row_trains_an_rllib_seed_from_the_recipes_initialisation_and_eval
     assert done.returncode == 0, done.stderr + (runs / "seed-2.log").read_text()
     summary = json.loads((runs / "seed-2" / "summary.json").read_text())
     assert summary["initialised_layers"] == 6 and summary["settings"]["init"] == "orthogonal"
+    assert summary["settings"]["adam_eps"] == 1e-5
     doc = results.load(out / "full-v0.rllib-ppo.seed2.json")
     assert doc["training"]["train_seeds"] == [[3 * 2**20, 128]] and doc["training"]["settings"]["init"] == "orthogonal"

@@ -1,10 +1,10 @@
 """How a results file was made: the fields a results file may carry beyond :mod:`.results`' first schema, each
 optional (files written before them load and report as they did), each checked when present (:func:`check`).
 
-- `meta.commit`: the project's commit, `git rev-parse HEAD` of the checkout the package runs from, with
-  `meta.modified` true when tracked files differ from it; the package version (`package.version`) when the
-  package does not run from a checkout (:func:`project_commit`). In `meta`, as it differs between two evaluations
-  of one policy (:func:`.results.comparable` leaves it out).
+- `meta.commit`: the project's commit, `git rev-parse HEAD` of the checkout the package runs from (or, installed,
+  of the checkout it is run in whose sources it is), with `meta.modified` true when tracked files differ from it;
+  the package version (`package.version`) otherwise (:func:`project_commit`). In `meta`, as it differs between
+  two evaluations of one policy (:func:`.results.comparable` leaves it out).
 - `meta.command`: the exact command that wrote the file, as a list of arguments (`bench evaluate`'s own).
 - `training`: a trained row's training record (:data:`TRAINING`), made by `python -m chopperscape.bench row`:
 
@@ -38,29 +38,52 @@ _KEYS = ("format", "row", "trainer", "mode", "seed", "command", "commit", "setti
 MAX_BYTES = 1 << 20
 
 
+def _git(root: Path, *args: str) -> str | None:
+    """`git -C root ARGS`'s output, or None where git fails (no git, not a checkout)."""
+    try:
+        done = subprocess.run(["git", "-C", str(root), *args], capture_output=True, timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return done.stdout.decode(errors="replace") if done.returncode == 0 else None
+
+
+def _head(root: Path) -> tuple[str, bool] | None:
+    """`(HEAD, modified)` of the checkout at `root`: whether tracked files differ from HEAD."""
+    sha = (_git(root, "rev-parse", "HEAD") or "").strip()
+    status = _git(root, "status", "--porcelain", "--untracked-files=no")
+    if not re.fullmatch(r"[0-9a-f]{40}", sha):
+        return None
+    return sha, status is None or bool(status.strip())
+
+
+def _same_sources(package: Path, source: Path) -> bool:
+    """Whether every module of the checkout's package sources `source` is in the installed `package`, byte for
+    byte (the wheel built from that checkout, not an older one)."""
+    modules = sorted(source.rglob("*.py"))
+    if not modules:
+        return False
+    try:
+        return all((package / m.relative_to(source)).read_bytes() == m.read_bytes() for m in modules)
+    except OSError:
+        return False
+
+
 @functools.lru_cache(maxsize=1)
 def project_commit() -> tuple[str, bool | None]:
-    """`(commit, modified)`: the checkout's HEAD and whether tracked files differ from it, when this package's files
-    are tracked by a git checkout; else `(package version, None)`."""
-    here = Path(__file__).resolve().parent
-    try:
-        tracked = subprocess.run(
-            ["git", "-C", str(here), "ls-files", "--error-unmatch", Path(__file__).name],
-            capture_output=True,
-            timeout=30,
-        )
-        if tracked.returncode == 0:
-            head = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, timeout=30)
-            status = subprocess.run(
-                ["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
-                capture_output=True,
-                timeout=30,
-            )
-            sha = head.stdout.decode().strip()
-            if head.returncode == 0 and re.fullmatch(r"[0-9a-f]{40}", sha):
-                return sha, status.returncode != 0 or bool(status.stdout.strip())
-    except (OSError, subprocess.SubprocessError):
-        pass
+    """`(commit, modified)`: the checkout's HEAD and whether tracked files differ from it. The checkout is the one
+    this package's files are tracked in, or, for an installed package (a wheel in a venv), the checkout of the
+    current folder when its `python/chopperscape` modules are the installed ones byte for byte (`pip install
+    ./python`, then run from the checkout). Else `(package version, None)`."""
+    package = Path(__file__).resolve().parents[1]
+    if _git(package / "bench", "ls-files", "--error-unmatch", Path(__file__).name) is not None:
+        head = _head(package)
+        if head is not None:
+            return head
+    top = (_git(Path.cwd(), "rev-parse", "--show-toplevel") or "").strip()
+    if top and _same_sources(package, Path(top) / "python" / "chopperscape"):
+        head = _head(Path(top))
+        if head is not None:
+            return head
     return __version__, None
 
 

@@ -146,9 +146,20 @@ def discounted_returns(
 
 class ReturnScaledPPOLearner(PPOTorchLearner):
     """RLlib's PPO learner with :class:`ReturnScaling` before GAE, at the config's `gamma`:
-    `PPOConfig().learners(learner_class=ReturnScaledPPOLearner)`."""
+    `PPOConfig().learners(learner_class=ReturnScaledPPOLearner)`. Its Adam takes `adam_eps` from the config's
+    `learner_config_dict` (`--adam-eps`; torch's 1e-8, RLlib's own, where it is not given; the recipe's is 1e-5)."""
 
     def build(self) -> None:
         super().build()
         if self._learner_connector is not None:
             self._learner_connector.insert_before(GeneralAdvantageEstimation, ReturnScaling(gamma=self.config.gamma))
+
+    def configure_optimizers_for_module(self, module_id: Any, config: Any = None) -> None:
+        eps = (config or self.config).learner_config_dict.get("adam_eps")
+        if eps is None:
+            return super().configure_optimizers_for_module(module_id, config)
+        import torch
+
+        params = self.get_parameters(self._module[module_id])
+        optimizer = torch.optim.Adam(params, eps=float(eps))
+        self.register_optimizer(module_id=module_id, optimizer=optimizer, params=params, lr_or_lr_schedule=config.lr)

@@ -183,6 +183,12 @@ def _ppo_flags(p: argparse.ArgumentParser) -> None:
         "--hidden", default=None, help="hidden layer sizes of the policy and value networks (default 128,128)"
     )
     p.add_argument(
+        "--adam-eps",
+        type=float,
+        default=None,
+        help="Adam's epsilon (default torch's 1e-8, RLlib's own; the recipe's is 1e-5); needs the reward scaling",
+    )
+    p.add_argument(
         "--init",
         choices=("torch", "orthogonal"),
         default=None,
@@ -266,6 +272,10 @@ def _settle(p: argparse.ArgumentParser, args: argparse.Namespace, presets: Prese
         p.error(f"--eval-seed must be in 0..2**63, got {args.eval_seed}")
     if args.eval_only and (args.restore is None or args.eval_episodes < 1):
         p.error("--eval-only needs --restore DIR and --eval-episodes N >= 1")
+    if args.adam_eps is not None and not 0 < args.adam_eps < 1:
+        p.error(f"--adam-eps must be a number in (0, 1), got {args.adam_eps}")
+    if args.adam_eps is not None and not args.norm_reward:
+        p.error("--adam-eps is set in the reward-scaling learner: it cannot be given with --no-norm-reward")
     if args.iterations is not None and args.iterations < 1:
         p.error(f"--iterations must be >= 1, got {args.iterations}")
 

@@ -55,7 +55,8 @@ CONSTANTS: dict[str, Any] = {
 SETTINGS = (
     "env_runners", "envs_per_runner", "cpus_per_runner", "native", "env_config", "seed", "train_batch_size",
     "minibatch_size", "epochs", "lr", "lr_floor", "anneal_lr", "steps", "minutes", "iterations", "gamma", "lambda_",
-    "entropy", "clip", "kl_coeff", "norm_reward", "hidden", "init", "torch_threads", "sample_timeout", "restore",
+    "entropy", "clip", "kl_coeff", "norm_reward", "adam_eps", "hidden", "init", "torch_threads", "sample_timeout",
+    "restore",
 )  # fmt: skip
 #: An evaluation hook: `(algo, args) -> JSON report` (python/examples/rllib_ppo.py's plays greedy episodes).
 Evaluate = Callable[[Any, argparse.Namespace], dict[str, Any]]
@@ -170,7 +171,10 @@ def build_config(args: argparse.Namespace):
             vf_clip_param=math.inf,  # rewards are scaled (below); RLlib's default clips the value loss at 10
             grad_clip=0.5,
         )
-        .learners(learner_class=ReturnScaledPPOLearner if args.norm_reward else None)
+        .learners(
+            learner_class=ReturnScaledPPOLearner if args.norm_reward else None,
+            learner_config_dict={"adam_eps": args.adam_eps},
+        )
         .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=args.hidden, vf_share_layers=False))
         .callbacks(on_episode_end=record_episode, on_sample_end=count_steps)
         .debugging(seed=args.seed)
