@@ -152,8 +152,8 @@ def _game_flags(p: argparse.ArgumentParser, presets: Presets | None) -> None:
             default=None,
             help="a features preset of chopperscape.learn.train in RLlib's terms (read from its one declaration, "
             "chopperscape.learn.recipe.PRESETS): its games (split over the runners), batch, minibatches, epochs, "
-            "lr, gamma, lambda, entropy, clip, hidden width, frame skip and step budget, and no KL penalty; a flag "
-            "given here wins",
+            "lr, gamma, lambda, entropy, clip, hidden width, frame skip and step budget, the recipe's orthogonal "
+            "initialisation, and no KL penalty; a flag given here wins",
         )
 
 
