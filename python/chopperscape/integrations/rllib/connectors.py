@@ -155,7 +155,8 @@ class ReturnScaledPPOLearner(PPOTorchLearner):
             self._learner_connector.insert_before(GeneralAdvantageEstimation, ReturnScaling(gamma=self.config.gamma))
 
     def configure_optimizers_for_module(self, module_id: Any, config: Any = None) -> None:
-        eps = (config or self.config).learner_config_dict.get("adam_eps")
+        config = config or self.config
+        eps = config.learner_config_dict.get("adam_eps")
         if eps is None:
             return super().configure_optimizers_for_module(module_id, config)
         import torch

@@ -12,6 +12,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from .weights import INITS
+
 #: The learning rate's floor of the recipe's schedule (`chopperscape.learn.recipe.LR_FLOOR`, tested equal).
 LR_FLOOR = 0.05
 
@@ -190,7 +192,7 @@ def _ppo_flags(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--init",
-        choices=("torch", "orthogonal"),
+        choices=INITS,
         default=None,
         help="the module's initial weights: torch's defaults (RLlib's own, the default) or the recipe's orthogonal "
         "ones (gain sqrt 2, 0.01 in the policy head, 1 in the value head, zero biases; the preset's)",
