@@ -85,6 +85,7 @@ def _rllib_ppo() -> dict[str, Any]:
         "kl-coeff": 0.0,
         "hidden": f"{r.hidden},{r.hidden}",
         "init": "orthogonal",
+        "obs-filter": "synced",
         "env-config": {"obs_type": "features", **dict(r.env_options)},
     }
 

@@ -17,8 +17,10 @@ from . import VECTOR_ONLY
 
 def observation_filter_state(env_runner: Any) -> dict:
     """The MeanStdFilter connector's state on a runner (runs in the runner); {} without one."""
+    from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
+
     for connector in env_runner._env_to_module.connectors:
-        if type(connector).__name__ == "MeanStdFilter":
+        if isinstance(connector, MeanStdFilter):
             return connector.get_state()
     return {}
 

@@ -14,6 +14,9 @@ from typing import Any
 
 from .weights import INITS
 
+#: `--obs-filter`'s choices: features normalised by `.meanstd.SyncedMeanStdFilter` or RLlib's own `MeanStdFilter`.
+OBS_FILTERS = ("synced", "rllib")
+
 #: The learning rate's floor of the recipe's schedule (`chopperscape.learn.recipe.LR_FLOOR`, tested equal).
 LR_FLOOR = 0.05
 
@@ -33,6 +36,8 @@ DEFAULTS: dict[str, Any] = {
     "kl_coeff": 0.2,
     # RLlib's own: torch's default initialisation of its module.
     "init": "torch",
+    # Not RLlib's own: its MeanStdFilter's merge across runners drifts (`.meanstd`); "rllib" keeps it.
+    "obs_filter": "synced",
 }
 
 
@@ -189,6 +194,14 @@ def _ppo_flags(p: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         help="Adam's epsilon (default torch's 1e-8, RLlib's own; the recipe's is 1e-5); needs the reward scaling",
+    )
+    p.add_argument(
+        "--obs-filter",
+        choices=OBS_FILTERS,
+        default=None,
+        help="how features are normalised: 'synced' (the default: RLlib's MeanStdFilter with an exact merge across "
+        "runners) or 'rllib' (RLlib 2.60's own, whose merge pulls the means toward 0 and inflates the stds); "
+        "pixels are always scaled to [0, 1]",
     )
     p.add_argument(
         "--init",

@@ -49,14 +49,14 @@ CONSTANTS: dict[str, Any] = {
     "vf_clip_param": None,  # off (math.inf): rewards are scaled
     "grad_clip": 0.5,
     "vf_share_layers": False,
-    "observation_filter": "MeanStdFilter (features) or FloatPixels (pixels)",
+    "observation_filter": "features: --obs-filter's MeanStdFilter; pixels: FloatPixels",
 }
 #: The flags that are settings of the run (recorded), not where it writes.
 SETTINGS = (
     "env_runners", "envs_per_runner", "cpus_per_runner", "native", "env_config", "seed", "train_batch_size",
     "minibatch_size", "epochs", "lr", "lr_floor", "anneal_lr", "steps", "minutes", "iterations", "gamma", "lambda_",
-    "entropy", "clip", "kl_coeff", "norm_reward", "adam_eps", "hidden", "init", "torch_threads", "sample_timeout",
-    "restore",
+    "entropy", "clip", "kl_coeff", "norm_reward", "adam_eps", "hidden", "init", "obs_filter", "torch_threads",
+    "sample_timeout", "restore",
 )  # fmt: skip
 #: An evaluation hook: `(algo, args) -> JSON report` (python/examples/rllib_ppo.py's plays greedy episodes).
 Evaluate = Callable[[Any, argparse.Namespace], dict[str, Any]]
@@ -132,6 +132,9 @@ def build_config(args: argparse.Namespace):
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 
     from . import ENV_NAME, FloatPixels, ReturnScaledPPOLearner  # registers "ChopperScape-v0" with RLlib
+    from .meanstd import SyncedMeanStdFilter
+
+    observation_filter = SyncedMeanStdFilter if args.obs_filter == "synced" else MeanStdFilter
 
     return (
         PPOConfig()
@@ -145,7 +148,7 @@ def build_config(args: argparse.Namespace):
             # Features normalised by running mean and std (the filter's state is synced and checkpointed);
             # pixels as floats in [0, 1] with a channel axis, for RLlib's default CNN.
             env_to_module_connector=(
-                (lambda env, spaces, device: MeanStdFilter())
+                (lambda env, spaces, device: observation_filter())
                 if args.env_config.get("obs_type") == "features"
                 else (lambda env, spaces, device: FloatPixels())
             ),
