@@ -111,6 +111,7 @@ def test_example_rejects_a_bad_env_config_before_starting_ray():
         (["--adam-eps", "nan"], "--adam-eps must be a number in (0, 1), got nan"),
         (["--adam-eps", "1e-5", "--no-norm-reward"], "--adam-eps is set in the reward-scaling learner"),
         (["--init", "xavier"], "argument --init: invalid choice: 'xavier'"),
+        (["--obs-filter", "none"], "argument --obs-filter: invalid choice: 'none'"),
     ],
 )
 def test_example_rejects_bad_schedule_and_evaluation_flags(flags, message):
@@ -502,6 +503,7 @@ def test_ppo_on_a_local_cluster_with_two_runners_checkpoints_and_restores(ray_cl
     # One hidden layer: an encoder layer each for the actor and the critic, and the two heads.
     assert summary["initialised_layers"] == 4 and summary["settings"]["init"] == "orthogonal"
     assert summary["settings"]["adam_eps"] == 1e-5
+    assert summary["settings"]["obs_filter"] == "synced"  # the exact merge of the two runners' statistics
     steps = [int(r["env_steps"]) for r in rows]
     assert steps[0] >= 400 and steps[1] >= steps[0] + 400 and steps[1] == summary["env_steps"]
     # Both runners sampled, each its own process, none of them the driver.
@@ -627,5 +629,6 @@ def test_bench_row_trains_an_rllib_seed_from_the_recipes_initialisation_and_eval
     summary = json.loads((runs / "seed-2" / "summary.json").read_text())
     assert summary["initialised_layers"] == 6 and summary["settings"]["init"] == "orthogonal"
     assert summary["settings"]["adam_eps"] is None  # the row keeps RLlib's own Adam
+    assert summary["settings"]["obs_filter"] == "synced"
     doc = results.load(out / "full-v0.rllib-ppo.seed2.json")
     assert doc["training"]["train_seeds"] == [[3 * 2**20, 128]] and doc["training"]["settings"]["init"] == "orthogonal"
