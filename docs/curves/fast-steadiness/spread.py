@@ -3,7 +3,11 @@ seed): each seed's mean return, the standard error of that mean over its episode
 ended out of fuel; then the spread of the seed means, the part of it that the evaluation's own noise explains, and how
 many seeds stalled on refuelling (more than 40 % of their episodes out of fuel).
 
-    python docs/curves/fast-steadiness/spread.py LABEL=GLOB [LABEL=GLOB ...] [--compare A B]
+    python docs/curves/fast-steadiness/spread.py LABEL=GLOB[,GLOB...] [LABEL=GLOB ...] [--compare A B]
+
+Each row also gets the IQM of its seeds' normalised scores with its 95 % bootstrap interval, computed by the
+leaderboard's own code (`chopperscape.bench.report.interval_estimates`), so rows of more than ten seeds compare as
+the leaderboard's do.
 
 `--compare A B` adds a permutation test (20,000 shuffles, seeded) of "A's seed means are more spread than B's" (the
 ratio of their standard deviations) and of "A has more stalled seeds than B" (Fisher's exact test, one-sided)."""
@@ -18,18 +22,25 @@ import sys
 
 import numpy as np
 
+from chopperscape.bench.report import interval_estimates
+
 STALLED = 0.4
 
 
-def load(pattern: str) -> list[tuple[str, float, float, float]]:
+def load(patterns: str) -> list[tuple[str, float, float, float, float]]:
+    """(file, mean return, its standard error, share out of fuel, normalised score) per file of the comma-separated
+    globs."""
     rows = []
-    for path in sorted(glob.glob(pattern)):
-        doc = json.loads(open(path).read())
-        r = np.array([e["return"] for e in doc["episodes"]], dtype=float)
-        fuel = sum(e["cause"] == "fuel" for e in doc["episodes"]) / len(r)
-        rows.append((path.rsplit("/", 1)[-1], float(r.mean()), float(r.std(ddof=1) / math.sqrt(len(r))), fuel))
-    if not rows:
-        raise SystemExit(f"error: no results files match {pattern!r}")
+    for pattern in patterns.split(","):
+        paths = sorted(glob.glob(pattern))
+        if not paths:
+            raise SystemExit(f"error: no results files match {pattern!r}")
+        for path in paths:
+            doc = json.loads(open(path).read())
+            r = np.array([e["return"] for e in doc["episodes"]], dtype=float)
+            fuel = sum(e["cause"] == "fuel" for e in doc["episodes"]) / len(r)
+            se = float(r.std(ddof=1) / math.sqrt(len(r)))
+            rows.append((path.rsplit("/", 1)[-1], float(r.mean()), se, fuel, float(doc["summary"]["score"])))
     return rows
 
 
@@ -51,9 +62,9 @@ def main() -> int:
         groups[label] = load(pattern)
     print(
         "| row | seeds | mean of seed means | sd of seed means | eval noise (rms SE) | sd beyond eval noise "
-        "| stalled (>40 % fuel) | lowest |"
+        "| stalled (>40 % fuel) | lowest | IQM [95 %] |"
     )
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for label, rows in groups.items():
         m = np.array([r[1] for r in rows])
         se = math.sqrt(float(np.mean([r[2] ** 2 for r in rows])))
@@ -61,9 +72,10 @@ def main() -> int:
         beyond = f"{math.sqrt(max(float(m.var(ddof=1)) - se**2, 0.0)):,.0f}" if len(m) > 1 else "–"
         stalled = sum(r[3] > STALLED for r in rows)
         low = min(rows, key=lambda r: r[1])
+        q = interval_estimates([np.array([r[4] for r in rows])])["iqm"]
         print(
             f"| {label} | {len(rows)} | {m.mean():,.0f} | {sd} | {se:,.0f} | {beyond} "
-            f"| {stalled} | {low[1]:,.0f} ({low[3]:.0%} fuel) |"
+            f"| {stalled} | {low[1]:,.0f} ({low[3]:.0%} fuel) | {q['point']:.3f} [{q['low']:.3f}, {q['high']:.3f}] |"
         )
     for label, rows in groups.items():
         print(f"{label}: " + " · ".join(f"{r[1]:,.0f} ({r[3]:.0%})" for r in rows))
