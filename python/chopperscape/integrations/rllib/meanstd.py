@@ -7,7 +7,7 @@ observations. From the second iteration on, every merge pulls the mean toward ze
 variance: after 180 iterations of one runner (3 M steps of the leaderboard's row) the filter's means are about a
 hundredth of the observations' and its standard deviations several times theirs. The policy then sees features
 scaled by a root mean square instead of standardised, and features with a large mean and a small spread (the
-fuel gauge) lose most of their resolution (``tests/test_rllib_meanstd.py`` reproduces RLlib's drift).
+fuel gauge) lose most of their resolution (``python/tests/test_rllib_meanstd.py`` reproduces RLlib's drift).
 
 What this filter does instead. Every runner starts an iteration from the merged state the local connector holds
 (the broadcast), so a runner's new observations are exactly its state *minus* that one: their count, mean and
