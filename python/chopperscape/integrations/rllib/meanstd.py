@@ -5,7 +5,7 @@ connector (`merge_states`) and broadcasts the result. In Ray 2.60 that merge rea
 the sum of the increments of its running mean since the last sync, as if it were the mean of the new
 observations. From the second iteration on, every merge pulls the mean toward zero and adds the lost mean to the
 variance: after 180 iterations of one runner (3 M steps of the leaderboard's row) the filter's means are about a
-hundredth of the observations' and its standard deviations several times theirs. The policy then sees features
+fortieth of the observations' and its standard deviations several times theirs. The policy then sees features
 scaled by a root mean square instead of standardised, and features with a large mean and a small spread (the
 fuel gauge) lose most of their resolution (``python/tests/test_rllib_meanstd.py`` reproduces RLlib's drift).
 
