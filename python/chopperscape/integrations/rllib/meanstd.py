@@ -21,6 +21,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from gymnasium.wrappers.utils import update_mean_var_count_from_moments
 from ray.rllib.connectors.env_to_module.mean_std_filter import MeanStdFilter
 from ray.rllib.utils.filter import RunningStat
 
@@ -31,15 +32,15 @@ Moments = tuple[int, np.ndarray, np.ndarray]
 
 
 def combine(a: Moments, b: Moments) -> Moments:
-    """The moments of the observations of `a` and of `b` together (Chan, Golub and LeVeque's pairwise update)."""
+    """The moments of the observations of `a` and of `b` together: Gymnasium's pairwise update (Chan, Golub and
+    LeVeque's, the one `chopperscape.learn.normalize.RunningMeanStd` keeps), in sums of squares."""
     (na, ma, sa), (nb, mb, sb) = a, b
     if nb == 0:
         return a
     if na == 0:
         return b
-    n = na + nb
-    delta = mb - ma
-    return n, ma + delta * (nb / n), sa + sb + delta * delta * (na * nb / n)
+    mean, var, n = update_mean_var_count_from_moments(ma, sa / na, na, mb, sb / nb, nb)
+    return n, mean, var * n
 
 
 def subtract(total: Moments, part: Moments) -> Moments:
