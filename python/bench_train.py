@@ -157,6 +157,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--network", default=None, help="the network of the CNN cases (default the preset's)")
     p.add_argument("--epochs", type=int, default=None, help="update epochs (default the preset's)")
     p.add_argument("--minibatches", type=int, default=None, help="minibatches an epoch (default the preset's)")
+    p.add_argument(
+        "--compile",
+        action="store_true",
+        help="the CNN cases' network through torch.compile (--torch-compile; the floors stay eager)",
+    )
     p.add_argument("--rust", metavar="PATH", help="the chopperscape command line: its learner beside torch's")
     p.add_argument("--rust-threads", default="1,2", help="the Rust learner's thread counts (default 1,2)")
     a = p.parse_args(argv)
@@ -172,6 +177,8 @@ def main(argv: list[str] | None = None) -> int:
             recipe = replace(recipe, torch_threads=a.threads)
         if a.network is not None and network_of(recipe) != "mlp":
             recipe = replace(recipe, network=a.network)
+        if a.compile and network_of(recipe) != "mlp":
+            recipe = replace(recipe, torch_compile=True)
         if a.epochs is not None:
             recipe = replace(recipe, update_epochs=a.epochs)
         if a.minibatches is not None:
@@ -187,7 +194,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s "
             f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads, network {network_of(recipe)}, "
-            f"{recipe.update_epochs} epochs of {recipe.num_minibatches} minibatches)"
+            f"{recipe.update_epochs} epochs of {recipe.num_minibatches} minibatches"
+            f"{', compiled; the floors eager' if recipe.torch_compile else ''})"
         )
         rust = [rust_run(a.rust, case, steps, t, a.smoke) for t in rust_threads] if a.rust and case != "pixels" else []
         for r in rust:

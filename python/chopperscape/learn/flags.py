@@ -132,6 +132,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     defaults = Recipe()
     for f in RECIPE_FLAGS:
+        if isinstance(getattr(defaults, f), bool):  # --torch-compile / --no-torch-compile
+            p.add_argument(
+                f"--{f.replace('_', '-')}",
+                action=argparse.BooleanOptionalAction,
+                default=None,
+                help=f"default {getattr(defaults, f)!r} (or the preset's)",
+            )
+            continue
         p.add_argument(
             f"--{f.replace('_', '-')}",
             type=type(getattr(defaults, f)),

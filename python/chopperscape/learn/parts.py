@@ -16,6 +16,7 @@ import torch
 from .. import NUM_ACTIONS
 from ..vector import VectorEnv
 from .augment import augmentation
+from .compiled import Network, network_for
 from .networks import ActorCritic, CnnAgent, build_agent, parameter_count
 from .normalize import ObsNormalizer
 from .recipe import MAX_PARAMETERS, MAX_ROLLOUT_BYTES, Recipe, network_of
@@ -73,6 +74,9 @@ class Parts(NamedTuple):
     #: Guidance from the game's features (:mod:`.guidance`), or :class:`Unguided`.
     guide: Any
     device: torch.device
+    #: The network as the loop calls it: `act` in the rollout, `heads` in the update (eager, or compiled:
+    #: :mod:`.compiled`).
+    net: Network
 
 
 def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
@@ -113,4 +117,5 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
 
     obs_dtype = torch.uint8 if pixels else torch.float32
     augment = augmentation(recipe, obs_shape)
-    return Parts(agent, obs_shape, obs_dtype, obs_norm, encode, augment, guide, device)
+    net = network_for(recipe, agent)
+    return Parts(agent, obs_shape, obs_dtype, obs_norm, encode, augment, guide, device, net)

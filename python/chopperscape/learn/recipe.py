@@ -41,6 +41,7 @@ RECIPE_FLAGS = (
     "teacher",
     "teacher_coef",
     "teacher_fade",
+    "torch_compile",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -180,7 +181,16 @@ class Recipe:
     #: 84 × 84 (scaled with the frame, at least 1), then cropped back at a random offset. "none" (the default):
     #: none. The rollout's forward passes see the frames as they are.
     augment: str = "none"
+    #: CNN recipes only: the network's forward and backward run through `torch.compile` (Inductor's C++ kernels;
+    #: :mod:`chopperscape.learn.compiled`), each minibatch padded to one fixed size so that it compiles once. The
+    #: same learning as eager torch up to float rounding; 1.3 to 2 times faster an update on this project's CPUs
+    #: (docs/notes/pixels-speed-and-probes.md). Needs a C++ compiler (`g++`, or the one `CXX` names).
+    torch_compile: bool = False
 
+
+#: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
+#: (:func:`chopperscape.learn.rundir.recipe_hash`) leaves them out at that value, so those folders still resume.
+LATER_SETTINGS: dict[str, Any] = {"torch_compile": False}
 
 #: `--option` names the recipe sets itself, and what to use instead.
 RESERVED_OPTIONS = {
@@ -253,7 +263,7 @@ def check_recipe(recipe: Recipe) -> None:
     if not isinstance(r.teacher, str):
         raise ValueError(f"invalid value {r.teacher!r} for option `teacher`: allowed a model file's path, or ''")
     policy_seed(r.seed)
-    for name in ("anneal_lr", "norm_obs", "norm_reward", "invert_frames"):
+    for name in ("anneal_lr", "norm_obs", "norm_reward", "invert_frames", "torch_compile"):
         check_bool(name, getattr(r, name))
     if not isinstance(r.obs_type, str):
         raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
@@ -273,6 +283,13 @@ def check_recipe(recipe: Recipe) -> None:
             f"invalid value {r.augment!r} for option `augment`: augmentation is for CNN recipes (pixel observations); "
             "allowed 'none' here"
         )
+    if r.torch_compile and mlp:
+        raise ValueError(
+            "invalid value True for option `torch_compile`: compiling is for CNN recipes (pixel observations; the "
+            "features MLP gains nothing from it); allowed False here"
+        )
+    if r.torch_compile:
+        check_compiler()
     if r.teacher and mlp:
         raise ValueError(
             f"invalid value {r.teacher!r} for option `teacher`: a features teacher guides CNN recipes (pixel "
@@ -285,6 +302,19 @@ def check_recipe(recipe: Recipe) -> None:
             raise ValueError(f"env option `{name}` is not taken: {RESERVED_OPTIONS[name]}")
         if name not in ENV_OPTIONS:
             raise ValueError(f"unknown env option `{name}`: allowed {', '.join(ENV_OPTIONS)}")
+
+
+def check_compiler() -> None:
+    """`ValueError` unless a C++ compiler for `torch.compile`'s CPU kernels is on PATH (`CXX`, else `g++`)."""
+    import shutil
+
+    cxx = os.environ.get("CXX") or "g++"
+    if shutil.which(cxx) is None:
+        raise ValueError(
+            f"option `torch_compile` needs a C++ compiler for torch.compile's CPU kernels, and {cxx!r} "
+            f"{'(from CXX) ' if os.environ.get('CXX') else ''}is not on PATH: install one (Debian: apt install g++) or "
+            "set CXX, or train without it (--no-torch-compile: the same recipe, slower)"
+        )
 
 
 def check_minutes(minutes: float | None) -> None:

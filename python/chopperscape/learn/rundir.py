@@ -135,8 +135,12 @@ def locked(func: F) -> F:
 
 def recipe_hash(recipe: Any) -> str:
     """The SHA-256 (hex) of `recipe`'s canonical JSON: a dataclass (`Recipe`) or a dict, keys sorted, no spaces,
-    tuples as lists (as `recipe.json` holds it, so the recipe read back from it hashes alike)."""
+    tuples as lists (as `recipe.json` holds it, so the recipe read back from it hashes alike). A setting added later
+    (`recipe.LATER_SETTINGS`) is left out at the value older runs had, so their resume states still match."""
+    from .recipe import LATER_SETTINGS
+
     data = asdict(recipe) if is_dataclass(recipe) and not isinstance(recipe, type) else recipe
+    data = {k: v for k, v in data.items() if not (k in LATER_SETTINGS and v == LATER_SETTINGS[k])}
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 

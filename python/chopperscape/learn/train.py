@@ -94,11 +94,11 @@ def train(
             optimizer.step()
 
         # What the loop calls, each timed by `phases` (OFF gives them back as they are).
-        act = phases.timed("forward", agent.act)
+        act = phases.timed("forward", p.net.act)
         env_step = phases.timed("env", run.envs.step)
         encode = phases.timed("obs_norm", p.encode)
         gae = phases.timed("gae", advantages)
-        heads = phases.timed("update_forward", agent.heads)
+        heads = phases.timed("update_forward", p.net.heads)
         backward = phases.timed("backward", torch.Tensor.backward)
         optimize, log = phases.timed("optimizer", optimize), phases.timed("logging", run.log)
         phases.start()

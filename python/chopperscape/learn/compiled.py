@@ -1,0 +1,68 @@
+"""The network as the training loop calls it (`Recipe.torch_compile`): eager torch, or the same network's heads
+through `torch.compile`, so that Inductor fuses the frames' cast and scaling, the ReLUs and the heads' small layers
+around the convolutions, forward and backward.
+
+Each batch is padded with blank frames to one fixed size before the compiled call and the outputs are cut back:
+the rollout's batch is always `num_envs`, but the update's minibatches vary by a few samples (reset steps are left
+out), and a compiled graph specialised to one size is faster here than one with symbolic sizes (measured:
+docs/notes/pixels-speed-and-probes.md). The padded rows' outputs are dropped, so they add nothing to the loss or
+its gradients. Sampling stays eager, drawing from torch's stream exactly as :meth:`ActorCritic.act` does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import torch
+
+from .networks import ActorCritic
+from .recipe import Recipe
+
+#: `heads(x)`: `(logits, value, embedding)` as :meth:`ActorCritic.heads` gives them.
+Heads = Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]]
+
+
+class Network(NamedTuple):
+    """What the loop calls of the network: `act` in the rollout, `heads` in the update."""
+
+    act: Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]]
+    heads: Heads
+
+
+def padded(heads: Heads, size: int) -> Heads:
+    """`heads` called on batches padded with zeros to `size` rows, its outputs cut back to the batch's rows."""
+
+    def call(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        n = int(x.shape[0])
+        if n > size:
+            raise ValueError(f"a batch of {n} rows is larger than the compiled size {size}")
+        if n < size:
+            x = torch.cat([x, x.new_zeros((size - n, *x.shape[1:]))])
+        logits, value, h = heads(x)
+        return logits[:n], value[:n], None if h is None else h[:n]
+
+    return call
+
+
+def sample(heads: Heads) -> Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]]:
+    """:meth:`ActorCritic.act` on `heads`: `(action, log-probability, entropy, value)`, the action sampled."""
+
+    def act(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+        logits, value, _ = heads(x)
+        dist = torch.distributions.Categorical(logits=logits)
+        action = dist.sample()
+        return action, dist.log_prob(action), dist.entropy(), value
+
+    return act
+
+
+def network_for(recipe: Recipe, agent: ActorCritic) -> Network:
+    """The agent's `act` and `heads` as `recipe` runs them: eager, or compiled for the rollout's batch
+    (`num_envs`) and the update's largest minibatch."""
+    if not recipe.torch_compile:
+        return Network(agent.act, agent.heads)
+    compiled: Any = torch.compile(agent.heads, dynamic=False, fullgraph=True)
+    batch = recipe.num_envs * recipe.num_steps
+    minibatch = -(-batch // recipe.num_minibatches)
+    return Network(sample(padded(compiled, recipe.num_envs)), padded(compiled, minibatch))
