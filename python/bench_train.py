@@ -9,7 +9,8 @@ update's forward, backward and optimiser step, logging), and prints per phase th
 share, beside the phase's floor: the same work with no Python in between (the env stepping the whole batch
 natively; one forward of the network over a whole rollout at once; each minibatch's forward, backward and Adam
 step run back to back, times the epochs). ``--threads N`` sets the run's torch threads (one core or both); the
-header line gives the CPU seconds beside the wall seconds. The gap between a
+header line gives the CPU seconds beside the wall seconds, and the rate without the setup and each phase's first
+call (``--compile``: the network through ``torch.compile``, which compiles there). The gap between a
 phase and its floor is what the loop's Python costs. On a shared machine, compare cases from one run only.
 ``--sb3`` adds, for each case with an MLP, Stable-Baselines3's PPO with the same network, batch, epochs and
 minibatches through the native adapter (`chopperscape.integrations.sb3`, `VecNormalize`), trained for the same steps
@@ -195,7 +196,8 @@ def main(argv: list[str] | None = None) -> int:
             f"\n## {case}: {done:,} env steps in {wall:.1f} s, {done / wall:,.0f} env steps/s "
             f"({cpu:.1f} CPU s, {recipe.torch_threads} torch threads, network {network_of(recipe)}, "
             f"{recipe.update_epochs} epochs of {recipe.num_minibatches} minibatches"
-            f"{', compiled; the floors eager' if recipe.torch_compile else ''})"
+            f"{', compiled; the floors eager' if recipe.torch_compile else ''}); "
+            f"{done / max(sum(phases.seconds.values()), 1e-9):,.0f} env steps/s without the setup and the first calls"
         )
         rust = [rust_run(a.rust, case, steps, t, a.smoke) for t in rust_threads] if a.rust and case != "pixels" else []
         for r in rust:
@@ -212,9 +214,12 @@ def main(argv: list[str] | None = None) -> int:
             f = f"{floor[name] * 1e6:9.2f}" if name in floor else f"{'–':>9}"
             cols = "".join(f" {r['phases'][name] / max(r['decisions'], 1) * 1e6:9.2f}" for r in rust)
             print(f"{name:<15} {sec / done * 1e6:9.2f} {sec / wall:7.1%} {f}{cols}")
-        other = wall - sum(phases.seconds.values())
+        first = sum(phases.first.values())
+        other = wall - sum(phases.seconds.values()) - first
         cols = "".join(f" {(r['wall'] - sum(r['phases'].values())) / max(r['decisions'], 1) * 1e6:9.2f}" for r in rust)
         print(f"{'(setup)':<15} {other / done * 1e6:9.2f} {other / wall:7.1%} {'–':>9}{cols}")
+        # Each phase's first call (where a compiled network compiles), apart from its per-step cost.
+        print(f"{'(first calls)':<15} {first / done * 1e6:9.2f} {first / wall:7.1%} {'–':>9}")
         if a.sb3 and network_of(recipe) == "mlp":
             sb3 = sb3_steps_per_second(recipe, steps)
             print(f"SB3 PPO, the same network, batch and epochs: {sb3:,.0f} env steps/s ({done / wall / sb3:.1f}x)")

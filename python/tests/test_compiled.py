@@ -139,3 +139,20 @@ def test_older_run_folders_still_resume():
     old = {k: v for k, v in asdict(Recipe()).items() if k != "torch_compile"}
     assert recipe_hash(Recipe()) == recipe_hash(old)
     assert recipe_hash(Recipe(obs_type="grayscale", torch_compile=True)) != recipe_hash(Recipe(obs_type="grayscale"))
+
+
+def test_phases_count_each_first_call_apart():
+    """Where a compiled network compiles (its first call) is not its cost per step: the stopwatch keeps it apart,
+    and the loop's time still adds up."""
+    import time
+
+    from chopperscape.learn.phases import Phases
+
+    phases = Phases()
+    phases.start()
+    sleep = phases.timed("env", time.sleep)
+    for seconds in (0.05, 0.0, 0.0):
+        sleep(seconds)
+    phases.finish(3)
+    assert phases.first["env"] >= 0.05 and phases.seconds["env"] < 0.05
+    assert phases.seconds["bookkeeping"] < 0.05

@@ -24,23 +24,27 @@ _F = TypeVar("_F", bound=Callable)
 
 
 class Phases:
-    """Seconds of wall time per phase, summed over the run (`seconds`), with the env steps they covered (`steps`)."""
+    """Seconds of wall time per phase, summed over the run (`seconds`), with the env steps they covered (`steps`).
+    Each phase's first call is counted apart (`first`): there a compiled network (`--torch-compile`) compiles, which
+    says nothing of the phase's cost per step."""
 
     def __init__(self) -> None:
         self.seconds = dict.fromkeys(PHASES, 0.0)
+        self.first = dict.fromkeys(PHASES, 0.0)
         self.steps = 0
         self._start = time.perf_counter()
 
     def timed(self, phase: str, fn: _F) -> _F:
-        """`fn`, its wall time added to `phase` at each call."""
-        seconds = self.seconds
+        """`fn`, its wall time added to `phase` at each call but the first (added to `first[phase]`)."""
+        seconds, first, called = self.seconds, self.first, [False]
 
         def wrapped(*args, **kwargs):
             t = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
-                seconds[phase] += time.perf_counter() - t
+                (seconds if called[0] else first)[phase] += time.perf_counter() - t
+                called[0] = True
 
         return wrapped  # type: ignore[return-value]
 
@@ -51,7 +55,7 @@ class Phases:
     def finish(self, steps: int) -> None:
         """Stops the loop's clock at `steps` env steps: the loop's time not in a timed phase is `bookkeeping`."""
         self.steps = steps
-        timed = sum(v for k, v in self.seconds.items() if k != "bookkeeping")
+        timed = sum(v for k, v in self.seconds.items() if k != "bookkeeping") + sum(self.first.values())
         self.seconds["bookkeeping"] = max(time.perf_counter() - self._start - timed, 0.0)
 
 
