@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Issue 43's target protocol for one training seed: the candidate recipe (the pixel preset with CoordConv, one epoch
+# of 16 minibatches and torch.compile, on both cores: RECIPE below) trained ALONE on the 2-core machine for its
+# 10 M-decision schedule, started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out
+# evaluation (100 greedy episodes from seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written
+# to RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to RUNS/target.csv: seed, decisions, wall and CPU
+# seconds of this call's training, the held-out mean, and how the episodes ended. Run nothing else meanwhile: the
+# wall time is the claim (a run's numbers do not depend on the machine's load, its wall time does).
+#   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
+# The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+PY=${PYTHON:-python}
+RECIPE=(--preset pixels --network small-coord --update-epochs 1 --num-minibatches 16 --torch-compile --torch-threads 2)
+seed=${1:?a training seed}
+runs=${2:?a folder for the runs}
+minutes=${3:-60}
+out=$runs/seed-$seed
+mkdir -p "$runs"
+if [ -f "$out/resume.pt" ]; then
+  cmd=("$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes")
+else
+  cmd=("$PY" -m chopperscape.learn.train "${RECIPE[@]}" --seed "$seed" --minutes "$minutes" --out "$out")
+fi
+/usr/bin/time -f "%e %U %S" -o "$runs/.time-$seed" "${cmd[@]}" >/dev/null
+read -r wall user sys <"$runs/.time-$seed"
+rm -f "$runs/.time-$seed"
+decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
+"$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
+[ -f "$runs/target.csv" ] || echo "seed,decisions,wall_s,cpu_s,mean_return,bird,fuel,truncated" >"$runs/target.csv"
+"$PY" - "$out/eval-$decisions.json" "$seed" "$decisions" "$wall" "$user" "$sys" >>"$runs/target.csv" <<'EOF'
+import json, sys
+path, seed, decisions, wall, user, system = sys.argv[1:]
+e = json.load(open(path))
+c = e.get("causes", {})
+print(f"{seed},{decisions},{float(wall):.0f},{float(user) + float(system):.0f},{e['mean_return']:.1f},"
+      f"{c.get('bird', 0):.2f},{c.get('fuel', 0):.2f},{c.get('truncated', 0):.2f}")
+EOF
+tail -n 1 "$runs/target.csv"
