@@ -183,7 +183,7 @@ class Recipe:
     augment: str = "none"
     #: CNN recipes only: the network's forward and backward run through `torch.compile` (Inductor's C++ kernels;
     #: :mod:`chopperscape.learn.compiled`), each minibatch padded to one fixed size so that it compiles once. The
-    #: same learning as eager torch up to float rounding; 1.3 to 2 times faster an update on this project's CPUs
+    #: same learning as eager torch up to float rounding; the pixel loop 1.4 times faster on this project's CPUs
     #: (docs/notes/pixels-speed-and-probes.md). Needs a C++ compiler (`g++`, or the one `CXX` names).
     torch_compile: bool = False
 
@@ -313,7 +313,7 @@ def check_compiler() -> None:
         raise ValueError(
             f"option `torch_compile` needs a C++ compiler for torch.compile's CPU kernels, and {cxx!r} "
             f"{'(from CXX) ' if os.environ.get('CXX') else ''}is not on PATH: install one (Debian: apt install g++) or "
-            "set CXX, or train without it (--no-torch-compile: the same recipe, slower)"
+            "set CXX, or train without it (--no-torch-compile: the same settings otherwise, slower)"
         )
 
 
