@@ -6,7 +6,7 @@ Each batch is padded with blank frames to one fixed size before the compiled cal
 the rollout's batch is always `num_envs`, but the update's minibatches vary by a few samples (reset steps are left
 out), and a compiled graph specialised to one size is faster here than one with symbolic sizes (measured:
 docs/notes/pixels-speed-and-probes.md). The padded rows' outputs are dropped, so they add nothing to the loss or
-its gradients. Sampling stays eager, drawing from torch's stream exactly as :meth:`ActorCritic.act` does.
+its gradients. Sampling stays eager: :func:`~.networks.act_on`, what :meth:`ActorCritic.act` calls.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import torch
 
-from .networks import ActorCritic
+from .networks import ActorCritic, act_on
 from .recipe import Recipe
 
 #: `heads(x)`: `(logits, value, embedding)` as :meth:`ActorCritic.heads` gives them.
@@ -45,18 +45,6 @@ def padded(heads: Heads, size: int) -> Heads:
     return call
 
 
-def sample(heads: Heads) -> Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]]:
-    """:meth:`ActorCritic.act` on `heads`: `(action, log-probability, entropy, value)`, the action sampled."""
-
-    def act(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-        logits, value, _ = heads(x)
-        dist = torch.distributions.Categorical(logits=logits)
-        action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), value
-
-    return act
-
-
 def network_for(recipe: Recipe, agent: ActorCritic) -> Network:
     """The agent's `act` and `heads` as `recipe` runs them: eager, or compiled for the rollout's batch
     (`num_envs`) and the update's largest minibatch."""
@@ -65,4 +53,5 @@ def network_for(recipe: Recipe, agent: ActorCritic) -> Network:
     compiled: Any = torch.compile(agent.heads, dynamic=False, fullgraph=True)
     batch = recipe.num_envs * recipe.num_steps
     minibatch = -(-batch // recipe.num_minibatches)
-    return Network(sample(padded(compiled, recipe.num_envs)), padded(compiled, minibatch))
+    rollout = padded(compiled, recipe.num_envs)
+    return Network(lambda x: act_on(rollout, x), padded(compiled, minibatch))

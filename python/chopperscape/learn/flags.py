@@ -132,19 +132,14 @@ def _parser() -> argparse.ArgumentParser:
     )
     defaults = Recipe()
     for f in RECIPE_FLAGS:
-        if isinstance(getattr(defaults, f), bool):  # --torch-compile / --no-torch-compile
-            p.add_argument(
-                f"--{f.replace('_', '-')}",
-                action=argparse.BooleanOptionalAction,
-                default=None,
-                help=f"default {getattr(defaults, f)!r} (or the preset's)",
-            )
-            continue
+        value = getattr(defaults, f)
+        # A boolean setting is a switch pair (--torch-compile / --no-torch-compile); any other takes a value.
+        kind: dict = {"action": argparse.BooleanOptionalAction} if isinstance(value, bool) else {"type": type(value)}
         p.add_argument(
             f"--{f.replace('_', '-')}",
-            type=type(getattr(defaults, f)),
+            **kind,
             default=None,
-            help=f"default {getattr(defaults, f)!r} (or the preset's)",
+            help=f"default {value!r} (or the preset's)",
         )
     p.add_argument("--no-norm-obs", action="store_true")
     p.add_argument("--no-norm-reward", action="store_true")

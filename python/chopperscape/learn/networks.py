@@ -46,11 +46,17 @@ class ActorCritic(nn.Module):
 
     def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
         """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
-        logits, value, _ = self.heads(x)
-        dist = torch.distributions.Categorical(logits=logits)
-        if action is None:
-            action = dist.sample()
-        return action, dist.log_prob(action), dist.entropy(), value
+        return act_on(self.heads, x, action)
+
+
+def act_on(heads, x: torch.Tensor, action: torch.Tensor | None = None):
+    """:meth:`ActorCritic.act` through any `heads` function (the agent's own, or a compiled one): `(action,
+    log-probability, entropy, value)`, the action sampled from torch's stream unless given."""
+    logits, value, _ = heads(x)
+    dist = torch.distributions.Categorical(logits=logits)
+    if action is None:
+        action = dist.sample()
+    return action, dist.log_prob(action), dist.entropy(), value
 
 
 class Agent(ActorCritic):

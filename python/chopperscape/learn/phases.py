@@ -36,15 +36,17 @@ class Phases:
 
     def timed(self, phase: str, fn: _F) -> _F:
         """`fn`, its wall time added to `phase` at each call but the first (added to `first[phase]`)."""
-        seconds, first, called = self.seconds, self.first, [False]
+        seconds, first = self.seconds, self.first
+        called = False
 
         def wrapped(*args, **kwargs):
+            nonlocal called
             t = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
-                (seconds if called[0] else first)[phase] += time.perf_counter() - t
-                called[0] = True
+                (seconds if called else first)[phase] += time.perf_counter() - t
+                called = True
 
         return wrapped  # type: ignore[return-value]
 
