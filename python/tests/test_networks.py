@@ -176,7 +176,7 @@ def test_keypoints_are_where_each_map_peaks():
 
 
 @needs_torch
-@pytest.mark.parametrize("network", ["small-coord", "small-keypoints", "small-coord-keypoints"])
+@pytest.mark.parametrize("network", ["small-coord", "small-keypoints", "small-coord-keypoints", "small-coord-deep"])
 def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
     """Each variant is a part the recipe names: trained by the same loop, saved, reloaded and exported to the
     operators the policy crate takes."""
@@ -200,3 +200,15 @@ def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
     assert loaded.agent.heads(x)[0].shape == (3, 5)
     result = export.export(path, tmp_path / "p.onnx")
     assert result["bytes"] > 0 and result.get("checked") in (True, False)
+
+
+@needs_torch
+def test_deep_adds_one_dense_layer_of_the_trunks_width():
+    """The "-deep" network is the same trunk with a second dense layer (width × width and a ReLU) before the heads."""
+    from chopperscape.learn.networks import build_agent
+
+    shape = (42, 42, 4)
+    plain, deep = build_agent("small-coord", shape), build_agent("small-coord-deep", shape)
+    extra = sum(p.numel() for p in deep.parameters()) - sum(p.numel() for p in plain.parameters())
+    assert extra == 256 * 256 + 256
+    assert deep.embedding_width == plain.embedding_width == 256

@@ -152,15 +152,18 @@ class Keypoints(nn.Module):
 
 #: What a CNN network's name may add to its base ("small", "nature"): "-split" gives the critic a trunk of its own,
 #: "-coord" CoordConv's coordinates after the first convolution, "-keypoints" a spatial soft-argmax in place of the
-#: flattened maps. The names `Recipe.network` takes are in :data:`chopperscape.learn.recipe.NETWORKS`.
-VARIANTS = ("-split", "-coord", "-keypoints")
+#: flattened maps, "-deep" a second dense layer of the same width after the first. The names `Recipe.network` takes
+#: are in :data:`chopperscape.learn.recipe.NETWORKS`.
+VARIANTS = ("-split", "-coord", "-keypoints", "-deep")
 
 
 class CnnAgent(ActorCritic):
     """Actor and critic heads on one shared CNN trunk (the Atari PPO layout of CleanRL and SB3's CnnPolicy), or,
     for a "-split" network, each on a trunk of its own (the layout of PPG's separate value network, Cobbe et al.
     2021: the value loss no longer shapes the policy's features). "-coord" adds CoordConv's coordinates to the
-    first convolution (:class:`Coords`), "-keypoints" reads the last maps as keypoints (:class:`Keypoints`).
+    first convolution (:class:`Coords`), "-keypoints" reads the last maps as keypoints (:class:`Keypoints`), "-deep"
+    adds a second dense layer (relative positions, such as the nearest tank's from the chopper, are a product of two
+    positions: one ReLU layer after the maps gives the linear heads little to combine them with).
     `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
     def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
@@ -193,7 +196,10 @@ class CnnAgent(ActorCritic):
                     layers.append(nn.ReLU())
                 channels = out
             read: nn.Module = Keypoints(sizes[-1]) if "keypoints" in variants else nn.Flatten()
-            return nn.Sequential(*layers, read, _layer(nn.Linear(flat, width)), nn.ReLU())
+            layers += [read, _layer(nn.Linear(flat, width)), nn.ReLU()]
+            if "deep" in variants:  # a second dense layer: the heads read a nonlinear mix of where things are
+                layers += [_layer(nn.Linear(width, width)), nn.ReLU()]
+            return nn.Sequential(*layers)
 
         trunk = make_trunk()
         # `actor.0` and `critic.0` are the one trunk (or the two); these names are the checkpoint format's.

@@ -205,7 +205,17 @@ RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
 #: The augmentations `Recipe.augment` names.
 AUGMENTS = ("none", "shift")
 #: The networks `Recipe.network` names.
-NETWORKS = ("auto", "mlp", "small", "nature", "small-split", "small-coord", "small-keypoints", "small-coord-keypoints")
+NETWORKS = (
+    "auto",
+    "mlp",
+    "small",
+    "nature",
+    "small-split",
+    "small-coord",
+    "small-keypoints",
+    "small-coord-keypoints",
+    "small-coord-deep",
+)
 
 
 def check_device(device: Any) -> None:
