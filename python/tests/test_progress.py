@@ -81,7 +81,25 @@ def test_the_schema_is_the_documented_contract():
     )  # fmt: skip
     assert progress.ENDINGS == ("ended", "bird", "fuel", "limit")
     assert progress.GUIDANCE == ("aux_loss", "teacher_kl")
-    assert progress.COLUMNS == progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS + progress.GUIDANCE
+    assert progress.SELF_SUPERVISED == ("recon_loss",)
+    assert progress.COLUMNS == (
+        progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS + progress.GUIDANCE + progress.SELF_SUPERVISED
+    )
+
+
+def test_a_csv_written_before_the_last_column_group_resumes_with_it_blank(tmp_path):
+    """Run folders of earlier versions (no `recon_loss` column) resume: their rows are kept, the new column blank;
+    any other header is still refused."""
+    older = tmp_path / "older.csv"
+    row = ["8", "1.0", "2", "10.0", "1.0", "5.0"] + [""] * (len(progress.OLDER_COLUMNS) - 6)
+    older.write_text(",".join(progress.OLDER_COLUMNS) + "\n" + ",".join(row) + "\n" + ",".join(["16", *row[1:]]) + "\n")
+    progress.Writer.resume(older, 8).close()
+    lines = older.read_text().splitlines()
+    assert lines == [",".join(progress.COLUMNS), ",".join(row + [""])]
+    other = tmp_path / "other.csv"
+    other.write_text(",".join(progress.OLDER_COLUMNS[:-1]) + "\n")
+    with pytest.raises(ValueError, match="its header differs"):
+        progress.Writer.resume(other, 8)
 
 
 def test_every_refusal_names_the_file_first(tmp_path):

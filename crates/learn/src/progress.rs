@@ -2,7 +2,7 @@
 //! formatted as Python's loop formats it.
 
 /// The columns, in order.
-pub const COLUMNS: [&str; 19] = [
+pub const COLUMNS: [&str; 20] = [
     "env_steps",
     "wall_s",
     "episodes",
@@ -22,6 +22,7 @@ pub const COLUMNS: [&str; 19] = [
     "limit",
     "aux_loss",
     "teacher_kl",
+    "recon_loss",
 ];
 
 /// What one update reports.
@@ -112,6 +113,7 @@ impl Row {
             share(0),
             share(1),
             share(2),
+            String::new(),
             String::new(),
             String::new(),
         ]

@@ -2,7 +2,8 @@
 :class:`Parts` the training loop calls — the network, how an observation batch becomes its input, what the update
 does to each minibatch, and the guidance from the game's features — so that the loop never asks which variant it
 runs. Plain PPO's guidance is :class:`Unguided`, which does nothing; the features twin, auxiliary head and teacher
-(:mod:`.guidance`) are imported only for a recipe that asks for them.
+(:mod:`.guidance`) are imported only for a recipe that asks for them. The self-supervised loss from the frames
+(:mod:`.selfsup`) is a part of its own, apart from the guidance: it reads nothing but the frames.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from .networks import ActorCritic, CnnAgent, build_agent, parameter_count
 from .normalize import ObsNormalizer
 from .recipe import MAX_PARAMETERS, MAX_ROLLOUT_BYTES, Recipe, network_of
 from .rollout import Rollout
+from .selfsup import frames_loss
 
 
 class Unguided:
@@ -77,6 +79,8 @@ class Parts(NamedTuple):
     #: The network as the loop calls it: `act` in the rollout, `heads` in the update (eager, or compiled:
     #: :mod:`.compiled`).
     net: Network
+    #: A self-supervised loss from the frames alone (:mod:`.selfsup`): `loss(frames, embedding)` per minibatch.
+    frames_loss: Any
 
 
 def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
@@ -118,4 +122,16 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
     obs_dtype = torch.uint8 if pixels else torch.float32
     augment = augmentation(recipe, obs_shape)
     net = network_for(recipe, agent)
-    return Parts(agent, obs_shape, obs_dtype, obs_norm, encode, augment, guide, device, net)
+    width = cast(CnnAgent, agent).embedding_width if pixels else 0
+    return Parts(
+        agent,
+        obs_shape,
+        obs_dtype,
+        obs_norm,
+        encode,
+        augment,
+        guide,
+        device,
+        net,
+        frames_loss(recipe, width, obs_shape, device),
+    )

@@ -11,7 +11,11 @@ they have no per-update diagnostics of their own). Readers: ``python -m choppers
 - :data:`ENDINGS`: how many episodes ended during the update, and the shares among them that a bird, the fuel and
   the step limit ended (blank when none ended);
 - :data:`GUIDANCE`: the pixel recipes' training-only losses, means over the update's minibatches, blank when off: the
-  auxiliary features loss (``--aux-coef``) and KL(teacher ‖ policy) (``--teacher``).
+  auxiliary features loss (``--aux-coef``) and KL(teacher ‖ policy) (``--teacher``);
+- :data:`SELF_SUPERVISED`: the loss from the frames alone (``--recon-coef``), its mean over the update's minibatches
+  before the weight, blank when off.
+
+A run's CSV written before a column group was added resumes: its rows are kept with the new columns blank.
 """
 
 from __future__ import annotations
@@ -30,8 +34,11 @@ RETURNS = ("env_steps", "wall_s", "episodes", "mean_return", "std_return", "mean
 DIAGNOSTICS = ("learning_rate", "entropy", "approx_kl", "clip_frac", "explained_var", "value_loss", "policy_loss")
 ENDINGS = ("ended", "bird", "fuel", "limit")
 GUIDANCE = ("aux_loss", "teacher_kl")
+SELF_SUPERVISED = ("recon_loss",)
 #: The columns ``chopperscape.learn.train`` writes, in order.
-COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE
+COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE + SELF_SUPERVISED
+#: The columns of the CSVs written before :data:`SELF_SUPERVISED` (they resume, the new columns blank).
+OLDER_COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE
 #: The largest progress CSV read (a 15-million-step run of the recipe writes about 200 KB).
 MAX_BYTES = 64 << 20
 
@@ -66,12 +73,12 @@ class Writer:
                 rows = list(csv.reader(f))
         except (UnicodeDecodeError, csv.Error, OSError) as e:
             raise ValueError(f"{path}: not a progress CSV this trainer wrote ({e})") from None
-        if not rows or tuple(rows[0]) != COLUMNS:
+        if not rows or tuple(rows[0]) not in (COLUMNS, OLDER_COLUMNS):
             raise ValueError(f"{path}: not a progress CSV this trainer wrote (its header differs)")
-        at = COLUMNS.index("env_steps")
-        keep = [r for r in rows[1:] if len(r) == len(COLUMNS) and r[at].isdigit() and int(r[at]) <= env_steps]
+        at, width, pad = COLUMNS.index("env_steps"), len(rows[0]), [""] * (len(COLUMNS) - len(rows[0]))
+        keep = [r + pad for r in rows[1:] if len(r) == width and r[at].isdigit() and int(r[at]) <= env_steps]
         text = io.StringIO()
-        csv.writer(text).writerows([rows[0], *keep])
+        csv.writer(text).writerows([list(COLUMNS), *keep])
         _atomic.write_text(path, text.getvalue())
         writer = cls.__new__(cls)
         writer.columns = COLUMNS

@@ -42,6 +42,7 @@ RECIPE_FLAGS = (
     "teacher_coef",
     "teacher_fade",
     "torch_compile",
+    "recon_coef",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -186,11 +187,15 @@ class Recipe:
     #: same learning as eager torch up to float rounding; the pixel loop 1.4 times faster on this project's CPUs
     #: (docs/notes/pixels-speed-and-probes.md). Needs a C++ compiler (`g++`, or the one `CXX` names).
     torch_compile: bool = False
+    #: CNN recipes only: weight of a self-supervised loss from the frames alone, a linear decoder that
+    #: reconstructs each minibatch's latest frame (at half size) from the trunk's embedding
+    #: (:mod:`chopperscape.learn.selfsup`). Training only: the saved model has no decoder. 0 (the default): none.
+    recon_coef: float = 0.0
 
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
 #: (:func:`chopperscape.learn.rundir.recipe_hash`) leaves them out at that value, so those folders still resume.
-LATER_SETTINGS: dict[str, Any] = {"torch_compile": False}
+LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0}
 
 #: `--option` names the recipe sets itself, and what to use instead.
 RESERVED_OPTIONS = {
@@ -268,6 +273,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
     number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
     number_in("aux_coef", r.aux_coef, 0.0, 1000.0)
+    number_in("recon_coef", r.recon_coef, 0.0, 1000.0)
     number_in("teacher_coef", r.teacher_coef, 0.0, 1000.0)
     number_in("teacher_fade", r.teacher_fade, 0.0, 1.0, low_open=True)
     if not isinstance(r.teacher, str):
@@ -286,6 +292,11 @@ def check_recipe(recipe: Recipe) -> None:
     if r.aux_coef > 0 and mlp:
         raise ValueError(
             f"invalid value {r.aux_coef!r} for option `aux_coef`: the auxiliary features loss is for CNN recipes "
+            "(pixel observations); allowed 0 here"
+        )
+    if r.recon_coef > 0 and mlp:
+        raise ValueError(
+            f"invalid value {r.recon_coef!r} for option `recon_coef`: the reconstruction loss is for CNN recipes "
             "(pixel observations); allowed 0 here"
         )
     if r.augment != "none" and mlp:

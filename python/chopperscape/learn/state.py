@@ -28,6 +28,9 @@ from .rundir import RECIPE_KEY, check_recipe_hash, recipe_hash
 
 #: The format of `OUT/resume.pt`: 2 is the state by field (1, by a fixed list of keys, is refused).
 RESUME_FORMAT = "chopperscape-ppo-resume/2"
+#: Fields added after resume states existed, with what an older state stands for (the part's state when off), so
+#: that older run folders still resume; a run whose recipe turns the part on has a recipe hash no older state has.
+LATER_FIELDS: dict[str, Any] = {"frames_loss": None}
 
 
 class EnvBatch:
@@ -98,6 +101,7 @@ class TrainState:
     episodes: Any  # rollout.Episodes
     envs: EnvBatch
     guidance: Any  # the recipe's guidance part (parts.Unguided for plain PPO)
+    frames_loss: Any  # the recipe's self-supervised part (selfsup.NoFramesLoss when off)
     rng: np.random.Generator  # the minibatch permutations
     torch_rng: TorchRng
     clock: Clock
@@ -112,10 +116,10 @@ class TrainState:
     def load_state_dict(self, saved: dict[str, Any]) -> None:
         """Restores every field from `saved`; `ValueError` naming the first that is missing or does not fit."""
         for f in fields(self):
-            if f.name not in saved:
+            if f.name not in saved and f.name not in LATER_FIELDS:
                 raise ValueError(f"it holds no `{f.name}`")
             try:
-                setattr(self, f.name, _load(getattr(self, f.name), saved[f.name]))
+                setattr(self, f.name, _load(getattr(self, f.name), saved.get(f.name, LATER_FIELDS.get(f.name))))
             except (KeyError, TypeError, ValueError, RuntimeError, AttributeError) as e:
                 raise ValueError(f"`{f.name}` does not fit ({e})") from None
 

@@ -132,7 +132,8 @@ def train(
             stats = UpdateStats()
             for _ in range(r.update_epochs):
                 for idx in batch.minibatches(s.rng, r.num_minibatches):
-                    logits, value, h = heads(p.augment(batch.obs[idx]))
+                    x = p.augment(batch.obs[idx])
+                    logits, value, h = heads(x)
                     dist = torch.distributions.Categorical(logits=logits)
                     logp, entropy = dist.log_prob(batch.actions[idx]), dist.entropy()
                     log_ratio = logp - batch.logp[idx]
@@ -143,7 +144,8 @@ def train(
                     v_loss = 0.5 * ((value - batch.returns[idx]) ** 2).mean()
                     ent = entropy.mean()
                     extra, guided = guide.loss(idx, logits, h, s.env_steps)
-                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra
+                    own, learned = p.frames_loss.loss(x, h)
+                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra + own
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {s.update}")
                     optimizer.zero_grad()
@@ -160,6 +162,7 @@ def train(
                             "value_loss": v_loss.item(),
                             "policy_loss": pg.item(),
                             **guided,
+                            **learned,
                         }
                     )
             s.update += 1

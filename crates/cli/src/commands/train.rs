@@ -160,14 +160,20 @@ fn start_folder(out: &Path, force: bool) -> Result<Option<PathBuf>> {
 fn resume_csv(path: &Path, env_steps: u64) -> Result<File> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut lines = text.lines();
-    if lines.next() != Some(header().as_str()) {
-        usage_bail!("{}: not a progress CSV this trainer wrote (its header differs)", path.display());
-    }
+    // A CSV written before the last column group was added (no `recon_loss`) resumes with those columns blank.
+    let older = COLUMNS[..COLUMNS.len() - 1].join(",");
+    let width = match lines.next() {
+        Some(h) if h == header() => COLUMNS.len(),
+        Some(h) if h == older => COLUMNS.len() - 1,
+        _ => usage_bail!("{}: not a progress CSV this trainer wrote (its header differs)", path.display()),
+    };
+    let pad = ",".repeat(COLUMNS.len() - width);
     let mut kept = header() + "\n";
     for line in lines {
         let steps = line.split(',').next().and_then(|s| s.parse::<u64>().ok());
-        if line.split(',').count() == COLUMNS.len() && steps.is_some_and(|s| s <= env_steps) {
+        if line.split(',').count() == width && steps.is_some_and(|s| s <= env_steps) {
             kept += line;
+            kept += &pad;
             kept += "\n";
         }
     }
