@@ -84,3 +84,24 @@ fn ctrl_c_saves_and_resume_goes_on() {
     let steps: Vec<u64> = after.iter().map(|r| r.split(',').next().unwrap().parse().unwrap()).collect();
     assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
 }
+
+#[test]
+fn a_run_folder_of_an_earlier_version_resumes_with_the_new_column_blank() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    cs().args(["train", "--steps", "1000", "--out"]).arg(&out).args(SMALL).assert().success();
+    // Its CSV as versions before `recon_loss` wrote it: one column fewer.
+    let csv = std::fs::read_to_string(out.join("progress.csv")).unwrap();
+    let older: Vec<String> = csv.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string()).collect();
+    assert!(older[0].ends_with(",aux_loss,teacher_kl"));
+    std::fs::write(out.join("progress.csv"), older.join("\n") + "\n").unwrap();
+    cs().args(["train", "--resume", "--steps", "2000", "--out"]).arg(&out).assert().success();
+    let csv = std::fs::read_to_string(out.join("progress.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].ends_with(",aux_loss,teacher_kl,recon_loss"));
+    assert_eq!(lines.len(), 5, "2000 decisions in updates of 512, the first two kept: {csv}");
+    assert_eq!(lines[1], format!("{},", older[1]));
+    // Any other header is still refused.
+    std::fs::write(out.join("progress.csv"), "env_steps,wall_s\n").unwrap();
+    cs().args(["train", "--resume", "--steps", "3000", "--out"]).arg(&out).assert().code(2);
+}
