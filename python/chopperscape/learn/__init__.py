@@ -18,6 +18,7 @@ module                 what it holds
 :mod:`.ppo`            the learning-rate schedule and the update's statistics by name
 :mod:`.train`          the PPO loop in CleanRL-style sections, and ``python -m chopperscape.learn.train``
 :mod:`.guidance`       pixel recipes' guidance from the game's features (auxiliary loss, teacher), a loop part
+:mod:`.selfsup`        a self-supervised loss from the frames alone (reconstruction), a loop part
 :mod:`.phases`         the loop's per-phase stopwatch (wrappers around what the loop calls)
 :mod:`.progress`       the learning-curve CSV's one schema: a writer and a reader (no torch)
 :mod:`.episodes`       a policy played on seeds, its episodes summarised in constant memory
