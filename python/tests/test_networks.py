@@ -176,7 +176,9 @@ def test_keypoints_are_where_each_map_peaks():
 
 
 @needs_torch
-@pytest.mark.parametrize("network", ["small-coord", "small-keypoints", "small-coord-keypoints", "small-coord-deep"])
+@pytest.mark.parametrize(
+    "network", ["small-coord", "small-keypoints", "small-coord-keypoints", "small-coord-deep", "small-coord-deep-split"]
+)
 def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
     """Each variant is a part the recipe names: trained by the same loop, saved, reloaded and exported to the
     operators the policy crate takes."""

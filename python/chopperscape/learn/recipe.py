@@ -220,6 +220,7 @@ NETWORKS = (
     "small-keypoints",
     "small-coord-keypoints",
     "small-coord-deep",
+    "small-coord-deep-split",
 )
 
 
