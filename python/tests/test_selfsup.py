@@ -141,3 +141,19 @@ def test_a_run_folder_of_an_earlier_version_resumes(tmp_path, monkeypatch):
     with open(out / "progress.csv", newline="") as f:
         done = list(csv.DictReader(f))
     assert len(done) == 4 and all(r["recon_loss"] == "" for r in done)
+
+
+def test_making_the_decoder_leaves_torchs_random_stream_as_it_is():
+    """The decoder draws its initial weights from a generator of its own: turning the loss on changes neither the
+    network's initial weights nor the actions sampled after it."""
+    import torch
+
+    from chopperscape.learn.selfsup import Reconstruction
+
+    torch.manual_seed(7)
+    expected = torch.rand(3)
+    torch.manual_seed(7)
+    a = Reconstruction(1.0, 16, (8, 8, 2), invert=True, device="cpu")
+    assert torch.equal(torch.rand(3), expected)
+    b = Reconstruction(1.0, 16, (8, 8, 2), invert=True, device="cpu")
+    assert torch.equal(a.decoder.weight, b.decoder.weight) and a.decoder.weight.abs().max() <= 0.25
