@@ -52,6 +52,23 @@ def cli() -> pathlib.Path | None:
     return pathlib.Path(meta["target_directory"]) / "debug" / "chopperscape"
 
 
+def pixel_recipe(**settings):
+    """A pixel recipe small enough for a test to train in seconds (16×16 frames, 2 stacked, 4 envs × 16 steps, 4
+    updates); `settings` replace any of these."""
+    from chopperscape.learn.recipe import Recipe
+
+    small = {
+        "obs_type": "grayscale",
+        "env_options": {"obs_size": [16, 16], "frame_stack": 2, "max_fuel": 120},
+        "network": "small",
+        "num_envs": 4,
+        "num_steps": 16,
+        "num_minibatches": 2,
+        "total_steps": 4 * 16 * 4,
+    }
+    return Recipe(**{**small, **settings})
+
+
 def progress_rows(path):
     """The rows of a progress CSV, as dicts of text."""
     with open(path, newline="") as f:

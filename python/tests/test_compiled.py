@@ -7,23 +7,13 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import needs_torch, progress_rows
+from conftest import needs_torch, pixel_recipe, progress_rows
 
 
 def _recipe(**kw):
-    from chopperscape.learn.recipe import Recipe
-
-    settings = {
-        "obs_type": "grayscale",
-        "env_options": {"obs_size": [20, 20], "frame_stack": 2, "max_fuel": 120},
-        "network": "small-coord",
-        "num_envs": 4,
-        "num_steps": 16,
-        "num_minibatches": 2,
-        "total_steps": 4 * 16 * 4,
-        **kw,
-    }
-    return Recipe(**settings)
+    return pixel_recipe(
+        **{"env_options": {"obs_size": [20, 20], "frame_stack": 2, "max_fuel": 120}, "network": "small-coord", **kw}
+    )
 
 
 @needs_torch

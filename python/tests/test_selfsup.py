@@ -8,6 +8,7 @@ import importlib.util
 import json
 
 import pytest
+from conftest import pixel_recipe
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
@@ -15,18 +16,7 @@ pytestmark = pytest.mark.skipif(
 
 
 def _recipe(**kw):
-    from chopperscape.learn.recipe import Recipe
-
-    base = {
-        "obs_type": "grayscale",
-        "env_options": {"obs_size": [16, 16], "frame_stack": 2, "max_fuel": 120},
-        "network": "small",
-        "num_envs": 4,
-        "num_steps": 16,
-        "num_minibatches": 2,
-        "total_steps": 4 * 16 * 6,
-    }
-    return Recipe(**{**base, **kw})
+    return pixel_recipe(**{"total_steps": 4 * 16 * 6, **kw})
 
 
 def test_the_target_is_the_latest_frame_as_the_network_reads_it_at_half_size():

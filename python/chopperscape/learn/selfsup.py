@@ -23,6 +23,7 @@ except ImportError as err:  # pragma: no cover - exercised only without torch
         "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
     ) from err
 
+from .networks import Frames
 from .recipe import Recipe
 
 
@@ -50,7 +51,8 @@ class Reconstruction:
 
     def __init__(self, coef: float, embedding_width: int, obs_shape: tuple[int, ...], invert: bool, device: Any):
         h, w = obs_shape[:2]
-        self.coef, self.invert = coef, invert
+        self.coef = coef
+        self.frames = Frames(invert)  # the network's own reading of a frame
         self.size = (h // 2, w // 2)
         # Its own random stream: the decoder is made uninitialised (`skip_init` draws nothing) and filled from a
         # generator of its own, so torch's stream (the network's, the sampling's) stays as it is.
@@ -66,10 +68,8 @@ class Reconstruction:
     def target(self, x: torch.Tensor) -> torch.Tensor:
         """`(N, H/2 · W/2)`: each stack's latest frame (uint8, ``(N, H, W)`` or ``(N, H, W, k)``) in [0, 1], inverted
         as the network reads it, averaged over 2×2 blocks (an odd last row or column left out)."""
-        latest = (x if x.dim() == 3 else x[..., -1]).float() * (1.0 / 255.0)
-        if self.invert:
-            latest = 1.0 - latest
-        return functional.avg_pool2d(latest.unsqueeze(1), 2).flatten(1)
+        latest = self.frames(x if x.dim() == 3 else x[..., -1:])  # (N, 1, H, W): only the latest frame converted
+        return functional.avg_pool2d(latest, 2).flatten(1)
 
     def loss(self, x: torch.Tensor, h: torch.Tensor | None) -> tuple[torch.Tensor, dict[str, float]]:
         if h is None:
