@@ -177,7 +177,15 @@ def test_keypoints_are_where_each_map_peaks():
 
 @needs_torch
 @pytest.mark.parametrize(
-    "network", ["small-coord", "small-keypoints", "small-coord-keypoints", "small-coord-deep", "small-coord-deep-split"]
+    "network",
+    [
+        "small-coord",
+        "small-keypoints",
+        "small-coord-keypoints",
+        "small-coord-deep",
+        "small-coord-deep-split",
+        "small-coord-deep-stem",
+    ],
 )
 def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
     """Each variant is a part the recipe names: trained by the same loop, saved, reloaded and exported to the
@@ -214,3 +222,30 @@ def test_deep_adds_one_dense_layer_of_the_trunks_width():
     extra = sum(p.numel() for p in deep.parameters()) - sum(p.numel() for p in plain.parameters())
     assert extra == 256 * 256 + 256
     assert deep.embedding_width == plain.embedding_width == 256
+
+
+@needs_torch
+def test_the_stem_gives_each_frame_its_grey_bands_and_learns_nothing_itself():
+    """The "-stem" network's `Stem`: frame f's band k is relu(x_f − knot_k), with the frames' pixels read as the
+    network reads them (inverted); it has no parameters, so the network differs from "small-coord-deep" only in
+    the first convolution's input channels (one per frame and knot)."""
+    import torch
+
+    from chopperscape.learn.networks import STEM_KNOTS, Frames, Stem, build_agent
+
+    raw = torch.tensor([[[[255, 176], [112, 0]]]], dtype=torch.uint8).permute(0, 2, 3, 1).repeat(1, 1, 1, 3)
+    raw[..., 1] = 255 - raw[..., 1]  # the second frame differs from the first and third
+    x = Frames(invert=True)(raw)
+    bands = Stem(3)(x)
+    k = len(STEM_KNOTS)
+    assert bands.shape == (1, 3 * k, 2, 2)
+    for f in range(3):
+        for j, knot in enumerate(STEM_KNOTS):
+            torch.testing.assert_close(bands[0, f * k + j], torch.relu(x[0, f] - knot))
+    # The tank (176: 0.31 inverted) shows in the second band and not the third; the chopper (112: 0.56) in both.
+    assert bands[0, 1, 0, 1] > 0 and bands[0, 2, 0, 1] == 0 and bands[0, 2, 1, 0] > 0
+    assert list(Stem(3).parameters()) == []
+    shape = (42, 42, 4)
+    plain, stem = build_agent("small-coord-deep", shape), build_agent("small-coord-deep-stem", shape)
+    extra = sum(p.numel() for p in stem.parameters()) - sum(p.numel() for p in plain.parameters())
+    assert extra == 16 * 4 * 4 * 4 * (k - 1)  # the first convolution's weights on the extra bands

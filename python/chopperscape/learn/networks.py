@@ -133,6 +133,33 @@ class Coords(nn.Module):
         return x + self.weight[0] * self.get_buffer("rows") + self.weight[1] * self.get_buffer("cols")
 
 
+class Stem(nn.Module):
+    """Grey bands before the first convolution: each stacked frame's pixel `x` (inverted, in [0, 1]) becomes
+    ``relu(x − knot)`` for each knot of :data:`STEM_KNOTS` (the knot 0 passes the frame through). The first
+    convolution sums a patch of pixels before any nonlinearity, so a patch fully covered by a light sprite and one
+    partly covered by a darker one can sum alike (the agent view's fuel tank and chopper at 42×42); with a ramp per
+    band it weighs the bands apart, as MinAtar's one channel per kind of object lets it, from the frames' grey levels
+    alone. Fixed, not learned: the convolution's weights on each band are what learns (and no gradient flows into
+    the frames, so the stem costs one elementwise pass)."""
+
+    def __init__(self, frames: int):
+        super().__init__()
+        self.frames = frames
+        self.register_buffer("knots", torch.tensor(STEM_KNOTS).view(1, 1, 1, 1, -1), persistent=False)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        # Computed channels-last (the frames' own memory order, which the convolutions read fastest): (N, H, W, F, k)
+        # to (N, F·k, H, W) as a view of (N, H, W, F·k).
+        n, f, h, w = x.shape
+        y = torch.relu(x.permute(0, 2, 3, 1).unsqueeze(-1) - self.get_buffer("knots"))
+        return y.reshape(n, h, w, f * len(STEM_KNOTS)).permute(0, 3, 1, 2)
+
+
+#: Where the stem's ramps start, in inverted frames' units (sky 0, the agent view's tank 0.31, chopper 0.56,
+#: bird 1): the frame itself, and ramps from between the sky and the tank and between the tank and the chopper.
+STEM_KNOTS = (0.0, 0.2, 0.45)
+
+
 class Keypoints(nn.Module):
     """A spatial soft-argmax (Levine et al. 2016): each feature map becomes the expected row and column of a
     softmax over its positions, a keypoint in [-1, 1]²: `C` maps of `H × W` give `2C` numbers that say where
@@ -152,9 +179,10 @@ class Keypoints(nn.Module):
 
 #: What a CNN network's name may add to its base ("small", "nature"): "-split" gives the critic a trunk of its own,
 #: "-coord" CoordConv's coordinates after the first convolution, "-keypoints" a spatial soft-argmax in place of the
-#: flattened maps, "-deep" a second dense layer of the same width after the first. The names `Recipe.network` takes
+#: flattened maps, "-deep" a second dense layer of the same width after the first, "-stem" a per-pixel stem before
+#: the first convolution (:class:`Stem`). The names `Recipe.network` takes
 #: are in :data:`chopperscape.learn.recipe.NETWORKS`.
-VARIANTS = ("-split", "-coord", "-keypoints", "-deep")
+VARIANTS = ("-split", "-coord", "-keypoints", "-deep", "-stem")
 
 
 class CnnAgent(ActorCritic):
@@ -164,6 +192,7 @@ class CnnAgent(ActorCritic):
     first convolution (:class:`Coords`), "-keypoints" reads the last maps as keypoints (:class:`Keypoints`), "-deep"
     adds a second dense layer (relative positions, such as the nearest tank's from the chopper, are a product of two
     positions: one ReLU layer after the maps gives the linear heads little to combine them with).
+    "-stem" reads each pixel's grey band before the first convolution (:class:`Stem`).
     `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
     def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
@@ -188,6 +217,9 @@ class CnnAgent(ActorCritic):
         def make_trunk() -> nn.Sequential:
             layers: list[nn.Module] = [Frames(invert_frames)]
             channels = stack
+            if "stem" in variants:
+                layers.append(Stem(stack))
+                channels = stack * len(STEM_KNOTS)
             for i, (out, kernel, stride) in enumerate(convs):
                 layers.append(_layer(nn.Conv2d(channels, out, kernel, stride)))
                 if i == 0 and "coord" in variants:

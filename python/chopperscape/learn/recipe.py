@@ -221,6 +221,7 @@ NETWORKS = (
     "small-coord-keypoints",
     "small-coord-deep",
     "small-coord-deep-split",
+    "small-coord-deep-stem",
 )
 
 
