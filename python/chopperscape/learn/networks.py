@@ -9,6 +9,7 @@ from typing import TypeVar, cast
 
 try:
     import torch
+    import torch.nn.functional as F
     from torch import nn
 except ImportError as err:  # pragma: no cover - exercised only without torch
     raise ImportError(
@@ -144,15 +145,15 @@ class Stem(nn.Module):
 
     def __init__(self, frames: int):
         super().__init__()
+        k = len(STEM_KNOTS)
         self.frames = frames
-        self.register_buffer("knots", torch.tensor(STEM_KNOTS).view(1, 1, 1, 1, -1), persistent=False)
+        # A grouped 1×1 convolution with fixed weights 1 and biases −knot: frame f to channels f·k … f·k + k − 1
+        # (what the exported graph takes: a Conv and a Relu).
+        self.register_buffer("weight", torch.ones(frames * k, 1, 1, 1), persistent=False)
+        self.register_buffer("bias", -torch.tensor(STEM_KNOTS).repeat(frames), persistent=False)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        # Computed channels-last (the frames' own memory order, which the convolutions read fastest): (N, H, W, F, k)
-        # to (N, F·k, H, W) as a view of (N, H, W, F·k).
-        n, f, h, w = x.shape
-        y = torch.relu(x.permute(0, 2, 3, 1).unsqueeze(-1) - self.get_buffer("knots"))
-        return y.reshape(n, h, w, f * len(STEM_KNOTS)).permute(0, 3, 1, 2)
+        return torch.relu(F.conv2d(x, self.get_buffer("weight"), self.get_buffer("bias"), groups=self.frames))
 
 
 #: Where the stem's ramps start, in inverted frames' units (sky 0, the agent view's tank 0.31, chopper 0.56,
