@@ -218,6 +218,43 @@ def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(model, exported, 
         assert "warning" not in run.stderr, run.stderr
 
 
+@needs_torch
+def test_cli_demo_plays_the_grey_band_network_as_evaluate_plays_it(tmp_path, capsys):
+    """The "-stem" network's export (its grey bands a grouped Conv with fixed weights) runs in the Rust policy crate
+    and plays the episodes torch plays: an untrained network (torch seed 0) whose policy head is scaled up, so that
+    its greedy actions are not near-ties."""
+    import torch
+
+    from chopperscape.learn import modelfile, networks, normalize
+    from chopperscape.learn.recipe import PRESETS, Recipe
+
+    exe = cli()
+    if exe is None:
+        pytest.skip("cargo is not installed: the comparison with `chopperscape demo --json` is skipped")
+    torch.manual_seed(0)
+    network, shape = "small-coord-deep-stem", (42, 42, 4)
+    agent = networks.build_agent(network, shape, 5, invert_frames=True)
+    with torch.no_grad():
+        agent.actor[1].weight.mul_(300.0)  # type: ignore[index]
+    recipe = Recipe(**{**PRESETS["pixels"], "network": network})
+    model, onnx = tmp_path / "stem.pt", tmp_path / "stem.onnx"
+    modelfile.save(model, agent, normalize.ObsNormalizer(shape, False), recipe, shape, 0)
+    assert export(model, "--out", onnx) == 0
+    capsys.readouterr()
+    assert evaluate(model, "--episodes", 4, "--seed", 11, "--per-episode") == 0
+    expected = json.loads(capsys.readouterr().out)["per_episode"]
+    run = subprocess.run(
+        [str(exe), "demo", "--policy", str(onnx), "--episodes", "4", "--seed", "11", "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    got = [json.loads(line) for line in run.stdout.splitlines()]
+    keys = ("seed", "return", "steps", "cause")
+    assert [{k: e[k] for k in keys} for e in got] == [{k: e[k] for k in keys} for e in expected]
+    assert len({e["steps"] for e in expected}) > 1  # the policy acts: not one fixed action's episodes
+
+
 def test_cli_refuses_a_policy_file_it_cannot_run(tmp_path):
     exe = cli()
     if exe is None:
