@@ -249,3 +249,14 @@ def test_the_stem_gives_each_frame_its_grey_bands_and_learns_nothing_itself():
     plain, stem = build_agent("small-coord-deep", shape), build_agent("small-coord-deep-stem", shape)
     extra = sum(p.numel() for p in stem.parameters()) - sum(p.numel() for p in plain.parameters())
     assert extra == 16 * 4 * 4 * 4 * (k - 1)  # the first convolution's weights on the extra bands
+
+
+@needs_torch
+def test_the_grey_bands_are_refused_on_plain_frames():
+    """Its knots are levels of inverted frames (the sky 0): on plain frames (the sky 1) every band would fire on the
+    sky, so the recipe refuses the pair, naming the option and what is allowed."""
+    from chopperscape.learn.recipe import Recipe, check_recipe
+
+    with pytest.raises(ValueError, match=r"small-coord-deep-stem.*drop --no-invert-frames"):
+        check_recipe(Recipe(obs_type="grayscale", network="small-coord-deep-stem", invert_frames=False))
+    check_recipe(Recipe(obs_type="grayscale", network="small-coord-deep-stem"))

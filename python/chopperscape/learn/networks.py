@@ -141,7 +141,7 @@ class Stem(nn.Module):
     partly covered by a darker one can sum alike (the agent view's fuel tank and chopper at 42×42); with a ramp per
     band it weighs the bands apart, as MinAtar's one channel per kind of object lets it, from the frames' grey levels
     alone. Fixed, not learned: the convolution's weights on each band are what learns (and no gradient flows into
-    the frames, so the stem costs one elementwise pass)."""
+    the frames, so the stem costs one forward pass of a 1×1 convolution)."""
 
     def __init__(self, frames: int):
         super().__init__()

@@ -306,6 +306,11 @@ def check_recipe(recipe: Recipe) -> None:
             f"invalid value {r.augment!r} for option `augment`: augmentation is for CNN recipes (pixel observations); "
             "allowed 'none' here"
         )
+    if r.network.endswith("-stem") and not r.invert_frames:
+        raise ValueError(
+            f"invalid value {r.network!r} for option `network`: its grey bands start at levels of inverted frames "
+            "(the sky 0); allowed with invert_frames (drop --no-invert-frames), or another network"
+        )
     if r.torch_compile and mlp:
         raise ValueError(
             "invalid value True for option `torch_compile`: compiling is for CNN recipes (pixel observations; the "
