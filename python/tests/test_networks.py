@@ -6,6 +6,8 @@ from __future__ import annotations
 import pytest
 from conftest import needs_torch
 
+from chopperscape.learn.recipe import NETWORKS
+
 
 def test_networks_refuse_observations_they_cannot_take():
     pytest.importorskip("torch")
@@ -176,20 +178,10 @@ def test_keypoints_are_where_each_map_peaks():
 
 
 @needs_torch
-@pytest.mark.parametrize(
-    "network",
-    [
-        "small-coord",
-        "small-keypoints",
-        "small-coord-keypoints",
-        "small-coord-deep",
-        "small-coord-deep-split",
-        "small-coord-deep-stem",
-    ],
-)
+@pytest.mark.parametrize("network", [n for n in NETWORKS if n.startswith("small-")])
 def test_the_position_reading_networks_train_save_and_export(network, tmp_path):
-    """Each variant is a part the recipe names: trained by the same loop, saved, reloaded and exported to the
-    operators the policy crate takes."""
+    """Each variant the recipe names (every "small-" network): trained by the same loop, saved, reloaded and
+    exported to the operators the policy crate takes."""
     import torch
 
     from chopperscape.learn import export, modelfile, train
