@@ -184,6 +184,19 @@ CASES = [
 ]
 
 
+def assert_demo_plays(
+    exe: pathlib.Path, exported: pathlib.Path, episodes: int, seed: int, flags: list[str], expected: list[dict]
+) -> subprocess.CompletedProcess:
+    """Runs `chopperscape demo --policy EXPORTED --json` and asserts that it plays the episodes `evaluate
+    --per-episode` reported (`expected`: seed, return, steps and cause of each); returns the finished run."""
+    cmd = [str(exe), "demo", "--policy", str(exported), "--episodes", str(episodes), "--seed", str(seed), "--json"]
+    run = subprocess.run([*cmd, *flags], check=True, capture_output=True, text=True)
+    got = [json.loads(line) for line in run.stdout.splitlines()]
+    keys = ("seed", "return", "steps", "cause")
+    assert [{k: e[k] for k in keys} for e in got] == [{k: e[k] for k in keys} for e in expected]
+    return run
+
+
 @needs_torch
 @pytest.mark.parametrize(
     "model,exported,warned,options,flags", CASES, ids=["trained-rules", "more-birds", "pixels-trained-rules"]
@@ -196,22 +209,7 @@ def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(model, exported, 
     args = [model, "--episodes", episodes, "--seed", seed, "--per-episode"]
     assert evaluate(*args, *[x for o in options for x in ("--option", o)]) == 0
     expected = json.loads(capsys.readouterr().out)["per_episode"]
-    cmd = [
-        str(exe),
-        "demo",
-        "--policy",
-        str(exported),
-        "--episodes",
-        str(episodes),
-        "--seed",
-        str(seed),
-        "--json",
-        *flags,
-    ]
-    run = subprocess.run(cmd, check=True, capture_output=True, text=True)
-    got = [json.loads(line) for line in run.stdout.splitlines()]
-    keys = ("seed", "return", "steps", "cause")
-    assert [{k: e[k] for k in keys} for e in got] == [{k: e[k] for k in keys} for e in expected]
+    run = assert_demo_plays(exe, exported, episodes, seed, flags, expected)
     for name in warned:
         assert f"was trained with {name} " in run.stderr, run.stderr
     if not warned:
@@ -243,15 +241,7 @@ def test_cli_demo_plays_the_grey_band_network_as_evaluate_plays_it(tmp_path, cap
     capsys.readouterr()
     assert evaluate(model, "--episodes", 4, "--seed", 11, "--per-episode") == 0
     expected = json.loads(capsys.readouterr().out)["per_episode"]
-    run = subprocess.run(
-        [str(exe), "demo", "--policy", str(onnx), "--episodes", "4", "--seed", "11", "--json"],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    got = [json.loads(line) for line in run.stdout.splitlines()]
-    keys = ("seed", "return", "steps", "cause")
-    assert [{k: e[k] for k in keys} for e in got] == [{k: e[k] for k in keys} for e in expected]
+    assert_demo_plays(exe, onnx, 4, 11, [], expected)
     assert len({e["steps"] for e in expected}) > 1  # the policy acts: not one fixed action's episodes
 
 
