@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Issue 43's target protocol for one training seed: the candidate recipe (the pixel preset with CoordConv, one epoch
-# of 16 minibatches and torch.compile, on both cores: RECIPE below) trained ALONE on the 2-core machine for its
-# 10 M-decision schedule, started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out
+# Issue 43's target protocol for one training seed: the candidate recipe (the pixel preset with the grey bands,
+# CoordConv and a second dense layer, one epoch of 16 minibatches at lr 2e-3 and torch.compile, on both cores:
+# RECIPE below; the fifth session's small-coord candidate before the eighth) trained ALONE on the 2-core machine for its
+# 8 M-decision schedule (what an hour alone holds at its 2,400 decisions a second), started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out
 # evaluation (100 greedy episodes from seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written
 # to RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to RUNS/target.csv: seed, decisions, wall and CPU
 # seconds of this call's training, the held-out mean, and how the episodes ended. Run nothing else meanwhile: the
@@ -11,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 PY=${PYTHON:-python}
-RECIPE=(--preset pixels --network small-coord --update-epochs 1 --num-minibatches 16 --torch-compile --torch-threads 2)
+RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16 --steps 8000000 --torch-compile --torch-threads 2)
 seed=${1:?a training seed}
 runs=${2:?a folder for the runs}
 minutes=${3:-60}
