@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
-# Issue 43's target protocol for one training seed: the candidate recipe (the pixel preset with the grey bands,
-# CoordConv and a second dense layer, one epoch of 16 minibatches at lr 2e-3 and torch.compile, on both cores:
-# RECIPE below; the fifth session's small-coord candidate before the eighth) trained ALONE on the 2-core machine for its
-# 8 M-decision schedule (what an hour alone holds at its 2,400 decisions a second), started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out
-# evaluation (100 greedy episodes from seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written
-# to RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to RUNS/target.csv: seed, decisions, wall and CPU
-# seconds of this call's training, the held-out mean, and how the episodes ended. Run nothing else meanwhile: the
-# wall time is the claim (a run's numbers do not depend on the machine's load, its wall time does).
+# Issue 43's target protocol for one training seed: the candidate recipe (RECIPE below: the pixel preset with the
+# grey bands, CoordConv and a second dense layer, `small-coord-deep-stem`, one epoch of 16 minibatches at lr 2e-3,
+# torch.compile, on both cores; the fifth session's `small-coord` candidate until the eighth) trained ALONE on the
+# 2-core machine for its 8 M-decision schedule (what an hour alone holds at about 2,400 decisions a second), started
+# in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out evaluation (100 greedy episodes from
+# seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written to RUNS/seed-SEED/eval-DECISIONS.json,
+# and one line appended to RUNS/target.csv: seed, decisions, wall and CPU seconds of this call's training, the
+# held-out mean, and how the episodes ended. Run nothing else meanwhile: the wall time is the claim (a run's numbers
+# do not depend on the machine's load, its wall time does).
 #   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
 # The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 PY=${PYTHON:-python}
-RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16 --steps 8000000 --torch-compile --torch-threads 2)
+RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16
+  --steps 8000000 --torch-compile --torch-threads 2)
 seed=${1:?a training seed}
 runs=${2:?a folder for the runs}
 minutes=${3:-60}
