@@ -10,28 +10,31 @@
 # do not depend on the machine's load, its wall time does).
 #   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
 # The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
-set -euo pipefail
-cd "$(dirname "$0")/../../.."
-PY=${PYTHON:-python}
-RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16
-  --steps 8000000 --torch-compile --torch-threads 2)
-seed=${1:?a training seed}
-runs=${2:?a folder for the runs}
-minutes=${3:-60}
-out=$runs/seed-$seed
-mkdir -p "$runs"
-if [ -f "$out/resume.pt" ]; then
-  cmd=("$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes")
-else
-  cmd=("$PY" -m chopperscape.learn.train "${RECIPE[@]}" --seed "$seed" --minutes "$minutes" --out "$out")
-fi
-/usr/bin/time -f "%e %U %S" -o "$runs/.time-$seed" "${cmd[@]}" >/dev/null
-read -r wall user sys <"$runs/.time-$seed"
-rm -f "$runs/.time-$seed"
-decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
-"$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
-[ -f "$runs/target.csv" ] || echo "seed,decisions,wall_s,cpu_s,mean_return,bird,fuel,truncated" >"$runs/target.csv"
-"$PY" - "$out/eval-$decisions.json" "$seed" "$decisions" "$wall" "$user" "$sys" >>"$runs/target.csv" <<'EOF'
+# The body is one function, which bash reads whole before it runs: an edit of this file cannot change a call
+# that is already running (bash reads a plain script as it goes).
+main() {
+  set -euo pipefail
+  cd "$(dirname "$0")/../../.."
+  PY=${PYTHON:-python}
+  RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16
+    --steps 8000000 --torch-compile --torch-threads 2)
+  seed=${1:?a training seed}
+  runs=${2:?a folder for the runs}
+  minutes=${3:-60}
+  out=$runs/seed-$seed
+  mkdir -p "$runs"
+  if [ -f "$out/resume.pt" ]; then
+    cmd=("$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes")
+  else
+    cmd=("$PY" -m chopperscape.learn.train "${RECIPE[@]}" --seed "$seed" --minutes "$minutes" --out "$out")
+  fi
+  /usr/bin/time -f "%e %U %S" -o "$runs/.time-$seed" "${cmd[@]}" >/dev/null
+  read -r wall user sys <"$runs/.time-$seed"
+  rm -f "$runs/.time-$seed"
+  decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
+  "$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
+  [ -f "$runs/target.csv" ] || echo "seed,decisions,wall_s,cpu_s,mean_return,bird,fuel,truncated" >"$runs/target.csv"
+  "$PY" - "$out/eval-$decisions.json" "$seed" "$decisions" "$wall" "$user" "$sys" >>"$runs/target.csv" <<'EOF'
 import json, sys
 path, seed, decisions, wall, user, system = sys.argv[1:]
 e = json.load(open(path))
@@ -39,4 +42,7 @@ c = e.get("causes", {})
 print(f"{seed},{decisions},{float(wall):.0f},{float(user) + float(system):.0f},{e['mean_return']:.1f},"
       f"{c.get('bird', 0):.2f},{c.get('fuel', 0):.2f},{c.get('truncated', 0):.2f}")
 EOF
-tail -n 1 "$runs/target.csv"
+  tail -n 1 "$runs/target.csv"
+}
+main "$@"
+exit
