@@ -30,7 +30,6 @@ main() {
   fi
   /usr/bin/time -f "%e %U %S" -o "$runs/.time-$seed" "${cmd[@]}" >/dev/null
   read -r wall user sys <"$runs/.time-$seed"
-  rm -f "$runs/.time-$seed"
   decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
   "$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
   [ -f "$runs/target.csv" ] || echo "seed,decisions,wall_s,cpu_s,mean_return,bird,fuel,truncated" >"$runs/target.csv"
@@ -42,6 +41,7 @@ c = e.get("causes", {})
 print(f"{seed},{decisions},{float(wall):.0f},{float(user) + float(system):.0f},{e['mean_return']:.1f},"
       f"{c.get('bird', 0):.2f},{c.get('fuel', 0):.2f},{c.get('truncated', 0):.2f}")
 EOF
+  rm -f "$runs/.time-$seed"  # only once its line is written: a cut evaluation leaves the call's seconds
   tail -n 1 "$runs/target.csv"
 }
 main "$@"
