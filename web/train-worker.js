@@ -3,8 +3,9 @@
 // totalSteps, evalEvery} (a fresh run the first time, then it goes on), {type: "stop"}, {type: "onnx"}. Out:
 // {type: "row", row (a progress.csv line), envSteps, onnx (the current policy), decisionsPerSec}, {type: "eval",
 // envSteps, mean} (the greedy policy on EVAL_EPISODES held-out episodes, every `evalEvery` updates and at the end),
-// {type: "heuristic", mean} (the heuristic on the same episodes, once), {type: "onnx", bytes}, {type: "finished"},
-// {type: "error", message}.
+// {type: "heuristic", mean} (the heuristic on the same episodes, once), {type: "onnx", bytes}, {type: "stopped",
+// envSteps} (the answer to "stop": no update starts after it, and every row learned before it was posted before it),
+// {type: "finished"}, {type: "error", message}.
 import init, { Trainer } from "./pkg/chopperscape_web.js";
 
 // The held-out episodes of the evaluation: seeds 1,000,000 to 1,000,019 (Python's `evaluate` plays its first 20).
@@ -16,6 +17,9 @@ let trainer = null;
 let evalEvery = 10;
 let updates = 0;
 let running = false;
+// The current loop's number: a loop whose number is no longer `run` ends at its next check, so that a "stop" and a
+// "start" arriving while a loop waits between updates leave one loop running, never two.
+let run = 0;
 let wall = 0; // seconds spent learning (stopped time not counted)
 
 function post(message, transfer = []) {
@@ -34,8 +38,8 @@ function evaluate() {
   }
 }
 
-async function loop() {
-  while (running) {
+async function loop(mine) {
+  while (running && mine === run) {
     if (trainer.finished()) {
       running = false;
       if (updates % evalEvery !== 0) evaluate();
@@ -77,10 +81,12 @@ self.onmessage = async (event) => {
       }
       if (!running) {
         running = true;
-        loop();
+        run += 1;
+        loop(run);
       }
     } else if (m.type === "stop") {
       running = false;
+      post({ type: "stopped", envSteps: trainer ? trainer.env_steps() : 0 });
     } else if (m.type === "onnx" && trainer) {
       const bytes = trainer.onnx();
       post({ type: "onnx", bytes }, [bytes.buffer]);

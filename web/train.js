@@ -15,7 +15,8 @@ const numSteps = Number(params.get("train_steps") ?? 0);
 const evalEvery = Number(params.get("train_eval_every") ?? 0);
 
 // `evals`: {envSteps, mean} of the greedy policy on the held-out episodes; `heuristic`: the heuristic's mean on
-// the same episodes; `passedAt`: seconds from the first click to the first evaluation above it.
+// the same episodes; `passedAt`: seconds from the first click to the first evaluation above it; `stoppedRows`: the
+// rows received when the worker answered the last Stop (null while it runs or before it answers): no row follows.
 const state = {
   rows: [],
   evals: [],
@@ -26,6 +27,7 @@ const state = {
   decisionsPerSec: 0,
   started: null,
   passedAt: null,
+  stoppedRows: null,
 };
 window.chopperscapeTrain = state;
 let worker = null;
@@ -140,6 +142,9 @@ function onMessage(event) {
     a.download = "chopperscape-fast.onnx";
     a.click();
     setTimeout(() => URL.revokeObjectURL(url), 1000);
+  } else if (m.type === "stopped") {
+    // Rows the worker posted before it read the Stop arrive before this answer; none come after it.
+    if (!state.running) state.stoppedRows = state.rows.length;
   } else if (m.type === "finished") {
     setRunning(false);
   } else if (m.type === "error") {
@@ -164,6 +169,7 @@ $("train").addEventListener("click", () => {
     state.started = performance.now();
   }
   const on = !state.running;
+  state.stoppedRows = null;
   worker.postMessage(on ? { type: "start", seed: 0, numEnvs, numSteps, evalEvery } : { type: "stop" });
   setRunning(on);
 });

@@ -59,10 +59,12 @@ test("Train learns in a worker: the curve grows, the flown policy updates, the p
     });
     assert.ok(red > 20, `${red} red pixels in the curve`);
     await page.click("#train"); // Stop
-    const stopped = await page.evaluate(() => window.chopperscapeTrain.rows.length);
+    // The worker answers the Stop; rows it learned before reading it may still arrive until then, none after.
+    await page.waitForFunction(() => window.chopperscapeTrain.stoppedRows !== null, null, { timeout: 60_000 });
+    const stopped = await page.evaluate(() => window.chopperscapeTrain.stoppedRows);
     await page.waitForTimeout(3000);
     const later = await page.evaluate(() => window.chopperscapeTrain.rows.length);
-    assert.ok(later <= stopped + 1, `still learning after Stop: ${stopped} → ${later}`);
+    assert.equal(later, stopped, `still learning after Stop: ${stopped} → ${later}`);
     assert.equal(await page.textContent("#train"), "Resume");
     assert.deepEqual(errors, []);
   } finally {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The teacher-free target's runs (issue 28): `--preset pixels` (p3 of docs/notes/teacher-free-probes-second-round.md:
+# The teacher-free target's runs (issue 28): the pixel preset until the ninth session (p3 of docs/notes/teacher-free-probes-second-round.md:
 # the 42x42 agent view, GAE lambda 0.98, 64 envs x 128 steps, 2 epochs at lr 1e-3, a 10 M decision schedule; seeds 0-2
 # were started with those settings as flags, the same recipe) for training seed SEED, started in RUNS/seed-SEED or
 # resumed from its checkpoint there, for at most MINUTES of wall time this
@@ -16,7 +16,9 @@ out=$runs/seed-$seed
 if [ -f "$out/resume.pt" ]; then
   "$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes" >/dev/null
 else
-  "$PY" -m chopperscape.learn.train --preset pixels --seed "$seed" --minutes "$minutes" --out "$out" >/dev/null
+  # The preset as it was until the ninth session (the flags give its settings back; test_train.py checks them).
+  "$PY" -m chopperscape.learn.train --preset pixels --network small --update-epochs 2 --num-minibatches 4 \
+    --learning-rate 1e-3 --steps 10000000 --seed "$seed" --minutes "$minutes" --out "$out" >/dev/null
 fi
 decisions=$(tail -n 1 "$out/progress.csv" | cut -d, -f1)
 "$PY" -m chopperscape.learn.evaluate "$out/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Issue 43's target protocol for one training seed: the candidate recipe (RECIPE below: the pixel preset with the
-# grey bands, CoordConv and a second dense layer, `small-coord-deep-stem`, one epoch of 16 minibatches at lr 2e-3,
-# torch.compile, on both cores; the fifth session's `small-coord` candidate until the eighth) trained ALONE on the
-# 2-core machine for its 8 M-decision schedule (what an hour alone holds at about 2,400 decisions a second), started
-# in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out evaluation (100 greedy episodes from
-# seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written to RUNS/seed-SEED/eval-DECISIONS.json,
-# and one line appended to RUNS/target.csv: seed, decisions, wall and CPU seconds of this call's training, the
-# held-out mean, and how the episodes ended. Run nothing else meanwhile: the wall time is the claim (a run's numbers
-# do not depend on the machine's load, its wall time does).
+# Issue 43's target protocol for one training seed: the candidate recipe (RECIPE below: the pixel preset, since
+# the ninth session the grey bands, CoordConv and a second dense layer, `small-coord-deep-stem`, one epoch of 16
+# minibatches at lr 2e-3; with torch.compile, on both cores; the fifth session's `small-coord` candidate until the
+# eighth) trained ALONE on the 2-core machine for its 8 M-decision schedule (what an hour alone holds at about 2,400
+# decisions a second), started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out evaluation
+# (100 greedy episodes from seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written to
+# RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to RUNS/target.csv: seed, decisions, wall and CPU
+# seconds of this call's training, the held-out mean, and how the episodes ended. Run nothing else meanwhile: the
+# wall time is the claim (a run's numbers do not depend on the machine's load, its wall time does). A run folder
+# lives on this machine only (runs/ is not committed): a seed cut by a session's end restarts from scratch in the
+# next session, so start one only with more than its hour left.
 #   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
 # The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
 # The body is one function, which bash reads whole before it runs: an edit of this file cannot change a call
@@ -16,8 +18,10 @@ main() {
   set -euo pipefail
   cd "$(dirname "$0")/../../.."
   PY=${PYTHON:-python}
-  RECIPE=(--preset pixels --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16
-    --steps 8000000 --torch-compile --torch-threads 2)
+  # The preset is the candidate since the ninth session (its learning settings; the eighth session's runs gave them
+  # as flags: --network small-coord-deep-stem --learning-rate 2e-3 --update-epochs 1 --num-minibatches 16 --steps
+  # 8000000, the same recipe field for field); the speed settings are the flags'.
+  RECIPE=(--preset pixels --torch-compile --torch-threads 2)
   seed=${1:?a training seed}
   runs=${2:?a folder for the runs}
   minutes=${3:-60}

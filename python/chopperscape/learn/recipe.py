@@ -49,9 +49,15 @@ RECIPE_FLAGS = (
 #: the command line win. ``pixels`` learns from the frames alone (no teacher, no features anywhere in training):
 #: the 42×42 agent view (pixel layout 3), grayscale, 4 stacked, each action held for 4 frames (env steps then
 #: count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995 per frame
-#: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 2 epochs of 4 minibatches at a
-#: learning rate of 1e-3 over a 10 M decision schedule. Chosen by the teacher-free probes
-#: (docs/notes/teacher-free-probes-second-round.md; p3 there); 84×84 with λ 0.95 did not train from frames alone here.
+#: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 1 epoch of 16 minibatches at a
+#: learning rate of 2e-3 over an 8 M decision schedule (an hour of the 2-core machine with ``--torch-compile
+#: --torch-threads 2``, the speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the
+#: small CNN reading each frame as three grey bands (the stem), with CoordConv's coordinates and a second dense
+#: layer (:mod:`chopperscape.learn.networks`). Chosen by issue 43's probes
+#: (docs/notes/pixels-speed-and-probes.md); until the ninth session the preset was the teacher-free probes' p3 (the
+#: plain small CNN, 2 epochs of 4 minibatches at 1e-3 over 10 M; docs/notes/teacher-free-probes-second-round.md),
+#: whose runs ``--network small --update-epochs 2 --num-minibatches 4 --learning-rate 1e-3 --steps 10000000``
+#: reproduce. 84×84 with λ 0.95 did not train from frames alone here.
 #: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
 #: features teacher (`--teacher`), the faster, privileged route.
 #: What the two pixel presets share: a small CNN on grayscale frames, 4 stacked at frame skip 4, γ 0.998 a decision.
@@ -68,11 +74,13 @@ PRESETS: dict[str, dict[str, Any]] = {
     "pixels": {
         **_FRAMES,
         "env_options": {"obs_size": [42, 42], "frame_stack": 4, "frame_skip": 4},
+        "network": "small-coord-deep-stem",
         "num_envs": 64,
-        "update_epochs": 2,
+        "update_epochs": 1,
+        "num_minibatches": 16,
         "gae_lambda": 0.98,
-        "learning_rate": 1e-3,
-        "total_steps": 10_000_000,
+        "learning_rate": 2e-3,
+        "total_steps": 8_000_000,
     },
     "pixels-teacher": {
         **_FRAMES,
@@ -98,8 +106,9 @@ PRESETS["fast"] = {
     "learning_rate": 1e-3,
     "total_steps": 3_000_000,
 }
-#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 8× the envs, so that each
+#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 4× the envs, so that each
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
+#: Not yet measured on a GPU with the current pixel preset (no task here has drawn one since it changed).
 PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
 #: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
