@@ -67,6 +67,20 @@ def test_recipe_runs_are_reproducible_and_follow_env_steps_not_the_clock(tmp_pat
     assert [r["mean_return"] for r in run("c", seed=1)] != [r["mean_return"] for r in first]
 
 
+def test_the_learning_rate_stops_at_its_floor():
+    from chopperscape.learn import ppo
+    from chopperscape.learn.recipe import LR_FLOOR, Recipe
+
+    def rates(**kw):
+        r = Recipe(learning_rate=1e-3, total_steps=1000, **kw)
+        return [ppo.learning_rate(r, t) for t in (0, 500, 900, 1000, 2000)]
+
+    assert rates() == pytest.approx([1e-3, 5e-4, 1e-4, LR_FLOOR * 1e-3, LR_FLOOR * 1e-3])
+    assert rates(lr_floor=0.3) == pytest.approx([1e-3, 5e-4, 3e-4, 3e-4, 3e-4])
+    assert rates(lr_floor=1.0) == rates(anneal_lr=False) == [1e-3] * 5
+    assert rates(lr_floor=0.0)[3:] == [0.0, 0.0]
+
+
 @needs_torch
 def test_progress_diagnostics_are_sane(tmp_path):
     from chopperscape.learn import train
@@ -168,8 +182,7 @@ EARLIER_PIXELS = {
 @pytest.mark.parametrize(
     "seed, name, flags",
     [
-        (0, "p43-target-stem8m-seed0", {"torch_compile": True, "torch_threads": 2}),
-        (1, "p43-target-stem8m-seed1", {"torch_compile": True, "torch_threads": 2}),
+        *((s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2}) for s in range(5)),
         # The earlier preset's runs (issue 28's three seeds), with the flags that give its learning settings back.
         (0, "tf42-p3-e2-lr1e-3", EARLIER_PIXELS),
         (1, "tf42-p3-seed1", EARLIER_PIXELS),

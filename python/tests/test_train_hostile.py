@@ -44,6 +44,8 @@ def no_training(monkeypatch):
         (["--env-threads", "0"], "env_threads"),
         (["--gamma", "1.5"], "gamma"),
         (["--learning-rate", "nan"], "learning_rate"),
+        (["--lr-floor", "1.5"], "lr_floor"),
+        (["--lr-floor", "-0.1"], "lr_floor"),
         (["--option", "obs_type=rgb"], "--obs-type"),
         (["--option", "num_threads=2"], "--env-threads"),
         (["--option", "lives=0"], "lives"),

@@ -3,15 +3,15 @@ statistics, kept by name and averaged over its minibatches."""
 
 from __future__ import annotations
 
-from .recipe import LR_FLOOR, Recipe
+from .recipe import Recipe
 
 
 def learning_rate(recipe: Recipe, env_steps: int) -> float:
     """The rate at `env_steps`: it follows env steps only, so the same run on a busy host is the same run. Annealed,
-    it falls linearly over `total_steps` to `LR_FLOOR` of itself."""
+    it falls linearly over `total_steps` to `lr_floor` of itself (`LR_FLOOR`, 5 %, unless the recipe says)."""
     lr = recipe.learning_rate
     if recipe.anneal_lr:
-        lr *= max(1.0 - env_steps / recipe.total_steps, LR_FLOOR)
+        lr *= max(1.0 - env_steps / recipe.total_steps, recipe.lr_floor)
     return lr
 
 

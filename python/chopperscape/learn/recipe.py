@@ -24,6 +24,7 @@ RECIPE_FLAGS = (
     "gamma",
     "gae_lambda",
     "learning_rate",
+    "lr_floor",
     "update_epochs",
     "num_minibatches",
     "clip_coef",
@@ -126,6 +127,7 @@ MAX_PARAMETERS = 1 << 28
 
 #: The learning rate's schedule over a step budget of T (`Recipe.anneal_lr`): the rate times max(1 - t / T, LR_FLOOR),
 #: a linear decay that stops at 5 % of the rate at 0.95 T. The SB3 and RLlib examples follow the same schedule.
+#: `Recipe.lr_floor` (`--lr-floor`) sets another floor for a run.
 LR_FLOOR = 0.05
 
 #: The step budget of the recipe's figures (docs/results.md, docs/learning.md): 30 minutes of one quiet core. A
@@ -147,6 +149,9 @@ class Recipe:
     gae_lambda: float = 0.95
     learning_rate: float = 3e-4
     anneal_lr: bool = True
+    #: Where the annealed rate stops, as a fraction of `learning_rate`: the rate times max(1 − t / T, lr_floor).
+    #: 1 keeps it constant; 0 anneals it to nothing at `total_steps`.
+    lr_floor: float = LR_FLOOR
     update_epochs: int = 4
     num_minibatches: int = 8
     clip_coef: float = 0.2
@@ -167,7 +172,7 @@ class Recipe:
     seed: int = 0
     torch_threads: int = 1
     env_threads: int = 1
-    #: The step budget: the learning rate anneals linearly over it, to `LR_FLOOR` of itself.
+    #: The step budget: the learning rate anneals linearly over it, to `lr_floor` of itself.
     total_steps: int = DEFAULT_STEPS
     #: Pixel recipes only: weight of an auxiliary loss that trains the CNN's trunk to predict the game's 46
     #: `features` (standardised) from the frames, read from a twin env that the same seeds and actions keep in
@@ -204,7 +209,7 @@ class Recipe:
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
 #: (:func:`chopperscape.learn.rundir.recipe_hash`) leaves them out at that value, so those folders still resume.
-LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0}
+LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0, "lr_floor": LR_FLOOR}
 
 #: `--option` names the recipe sets itself, and what to use instead.
 RESERVED_OPTIONS = {
@@ -279,6 +284,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("gamma", r.gamma, 0.0, 1.0, low_open=True)
     number_in("gae_lambda", r.gae_lambda, 0.0, 1.0)
     number_in("learning_rate", r.learning_rate, 0.0, 1.0, low_open=True)
+    number_in("lr_floor", r.lr_floor, 0.0, 1.0)
     number_in("clip_coef", r.clip_coef, 0.0, 10.0, low_open=True)
     number_in("ent_coef", r.ent_coef, 0.0, 1000.0)
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)
