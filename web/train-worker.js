@@ -3,8 +3,8 @@
 // totalSteps, evalEvery} (a fresh run the first time, then it goes on), {type: "stop"}, {type: "onnx"}. Out:
 // {type: "row", row (a progress.csv line), envSteps, onnx (the current policy), decisionsPerSec}, {type: "eval",
 // envSteps, mean} (the greedy policy on EVAL_EPISODES held-out episodes, every `evalEvery` updates and at the end),
-// {type: "heuristic", mean} (the heuristic on the same episodes, once), {type: "onnx", bytes}, {type: "stopped",
-// envSteps} (the answer to "stop": no update starts after it, and every row learned before it was posted before it),
+// {type: "heuristic", mean} (the heuristic on the same episodes, once), {type: "onnx", bytes}, {type: "stopped"}
+// (the answer to "stop": no update starts after it, and every row learned before it was posted before it),
 // {type: "finished"}, {type: "error", message}.
 import init, { Trainer } from "./pkg/chopperscape_web.js";
 
@@ -17,8 +17,8 @@ let trainer = null;
 let evalEvery = 10;
 let updates = 0;
 let running = false;
-// The current loop's number: a loop whose number is no longer `run` ends at its next check, so that a "stop" and a
-// "start" arriving while a loop waits between updates leave one loop running, never two.
+// The current loop's number: a "stop" or a newer "start" changes it, and a loop whose number is no longer `run` ends
+// at its next check, so that a "stop" and a "start" arriving while a loop waits leave one loop running, never two.
 let run = 0;
 let wall = 0; // seconds spent learning (stopped time not counted)
 
@@ -39,7 +39,7 @@ function evaluate() {
 }
 
 async function loop(mine) {
-  while (running && mine === run) {
+  while (mine === run) {
     if (trainer.finished()) {
       running = false;
       if (updates % evalEvery !== 0) evaluate();
@@ -86,7 +86,8 @@ self.onmessage = async (event) => {
       }
     } else if (m.type === "stop") {
       running = false;
-      post({ type: "stopped", envSteps: trainer ? trainer.env_steps() : 0 });
+      run += 1;
+      post({ type: "stopped" });
     } else if (m.type === "onnx" && trainer) {
       const bytes = trainer.onnx();
       post({ type: "onnx", bytes }, [bytes.buffer]);

@@ -32,7 +32,7 @@ from typing import Any
 
 from chopperscape import MODES
 from chopperscape.integrations.sb3_train import recipe_settings, train
-from chopperscape.learn.recipe import LR_FLOOR, PRESETS, Recipe
+from chopperscape.learn.recipe import PRESETS, Recipe
 
 
 def pixel_settings(size: int) -> dict[str, Any]:
@@ -92,7 +92,7 @@ def main() -> None:
         settings, flag = pixel_settings(a.pixels), "--pixels"
     elif preset is not None:
         recipe = Recipe(**{k: v for k, v in PRESETS[preset].items() if k != "total_steps"})
-        settings, flag = recipe_settings(recipe, LR_FLOOR), f"--preset {preset}"
+        settings, flag = recipe_settings(recipe), f"--preset {preset}"
     else:
         flag = "--mode"
     try:

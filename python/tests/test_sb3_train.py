@@ -87,7 +87,7 @@ def test_the_fast_presets_settings_in_sb3s_terms():
     from chopperscape.learn.recipe import LR_FLOOR, PRESETS, Recipe
 
     fast = Recipe(**{k: v for k, v in PRESETS["fast"].items() if k != "total_steps"})
-    s = recipe_settings(fast, LR_FLOOR)
+    s = recipe_settings(fast)
     ppo = ppo_settings(fast)
     assert s["net_arch"] == ppo.pop("policy_kwargs")["net_arch"]
     assert {k: s[k] for k in ppo} == ppo

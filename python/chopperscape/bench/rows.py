@@ -62,9 +62,8 @@ def _learn(preset: str | None) -> Callable[[], dict[str, Any]]:
 
 def _sb3_ppo() -> dict[str, Any]:
     from ..integrations.sb3_train import recipe_settings
-    from ..learn.recipe import LR_FLOOR
 
-    return recipe_settings(_fast(), LR_FLOOR)
+    return recipe_settings(_fast())
 
 
 def _rllib_ppo() -> dict[str, Any]:

@@ -84,10 +84,10 @@ DQN_DEFAULTS: dict[str, Any] = {
 _ADAPTER = ("policy", "num_envs", "env_options", "normalize", "lr_floor", "clip_anneal", "net_arch")
 
 
-def recipe_settings(recipe: Any, lr_floor: float) -> dict[str, Any]:
+def recipe_settings(recipe: Any) -> dict[str, Any]:
     """PPO settings of a features recipe (:class:`chopperscape.learn.recipe.Recipe`, read by attribute): its games,
     env options, rollout, batch, epochs, γ, GAE λ, clip, coefficients, gradient clip, [hidden, hidden] tanh network
-    (SB3's MlpPolicy), learning rate annealed to `lr_floor` of itself (the recipe's schedule), and observations and
+    (SB3's MlpPolicy), learning rate annealed to the recipe's `lr_floor` of itself (its schedule), and observations and
     rewards normalised by `VecNormalize` (the recipe's normalisation)."""
     r = recipe
     from .sb3 import ppo_settings
@@ -100,7 +100,7 @@ def recipe_settings(recipe: Any, lr_floor: float) -> dict[str, Any]:
         "env_options": {"obs_type": "features", **dict(r.env_options)},
         "normalize": True,
         "learning_rate": r.learning_rate,
-        "lr_floor": lr_floor,
+        "lr_floor": r.lr_floor,
         **ppo,
         "clip_anneal": False,
         "net_arch": net_arch,
