@@ -1,7 +1,10 @@
 """Pixel probes at equal decisions (issue 43): each run's training return (the last 100 episodes) at fixed decision
 counts, and the share of episodes that ended out of fuel over the 100 k decisions before each mark.
 
-    python docs/curves/pixels-probes/compare.py RUN.csv ... [--marks 250000,500000,750000,1000000]
+    python docs/curves/pixels-probes/compare.py RUN.csv ... [--marks 250000,500000,750000,1000000] [--smooth 500000]
+
+`--smooth N` gives, at each mark, the mean of the progress rows' training return over the N decisions before it in
+place of the last row's (the last 100 episodes swing by a quarter from one row to the next late in a run).
 """
 
 from __future__ import annotations
@@ -10,7 +13,7 @@ import argparse
 import csv
 
 
-def at(path: str, marks: list[int]) -> tuple[list[str], list[str], dict[str, str]]:
+def at(path: str, marks: list[int], smooth: int = 0) -> tuple[list[str], list[str], dict[str, str]]:
     rows = list(csv.DictReader(open(path, newline="")))
     returns, fuel = [], []
     for m in marks:
@@ -19,7 +22,10 @@ def at(path: str, marks: list[int]) -> tuple[list[str], list[str], dict[str, str
         window = [r for r in rows if m - 100_000 < int(r["env_steps"]) <= m and r["fuel"] and r["ended"]]
         ended = sum(int(r["ended"]) for r in window)
         share = sum(float(r["fuel"]) * int(r["ended"]) for r in window) / ended if ended else float("nan")
-        returns.append(f"{float(upto[-1]['mean_return']):,.0f}" if upto and reached else "–")
+        if smooth:
+            upto = [r for r in upto if int(r["env_steps"]) > m - smooth]
+        value = sum(float(r["mean_return"]) for r in upto) / len(upto) if upto else 0.0
+        returns.append(f"{value if smooth else float(upto[-1]['mean_return']):,.0f}" if upto and reached else "–")
         fuel.append(f"{share:.2f}" if reached and ended else "–")
     return returns, fuel, rows[-1] if rows else {}
 
@@ -28,12 +34,13 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("runs", nargs="+")
     p.add_argument("--marks", default="250000,500000,750000,1000000")
+    p.add_argument("--smooth", type=int, default=0, help="average the training return over N decisions before a mark")
     a = p.parse_args()
     marks = [int(m) for m in a.marks.split(",")]
     print("| run | " + " | ".join(f"{m / 1e6:g} M" for m in marks) + " | fuel share at each | reached |")
     print("|---|" + "---:|" * len(marks) + "---|---|")
     for path in a.runs:
-        returns, fuel, last = at(path, marks)
+        returns, fuel, last = at(path, marks, a.smooth)
         print(f"| `{path}` | " + " | ".join(returns) + f" | {' / '.join(fuel)} | {last.get('env_steps')} |")
 
 
