@@ -22,10 +22,10 @@ def at(path: str, marks: list[int], smooth: int = 0) -> tuple[list[str], list[st
         window = [r for r in rows if m - 100_000 < int(r["env_steps"]) <= m and r["fuel"] and r["ended"]]
         ended = sum(int(r["ended"]) for r in window)
         share = sum(float(r["fuel"]) * int(r["ended"]) for r in window) / ended if ended else float("nan")
-        if smooth:
-            upto = [r for r in upto if int(r["env_steps"]) > m - smooth]
-        value = sum(float(r["mean_return"]) for r in upto) / len(upto) if upto else 0.0
-        returns.append(f"{value if smooth else float(upto[-1]['mean_return']):,.0f}" if upto and reached else "–")
+        # The last row before the mark, or with `smooth` every row of the N decisions before it.
+        recent = [r for r in upto if int(r["env_steps"]) > m - smooth] if smooth else upto[-1:]
+        mean = sum(float(r["mean_return"]) for r in recent) / len(recent) if recent else 0.0
+        returns.append(f"{mean:,.0f}" if recent and reached else "–")
         fuel.append(f"{share:.2f}" if reached and ended else "–")
     return returns, fuel, rows[-1] if rows else {}
 
