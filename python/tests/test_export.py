@@ -217,10 +217,11 @@ def test_cli_demo_plays_the_export_as_evaluate_plays_the_model(model, exported, 
 
 
 @needs_torch
-def test_cli_demo_plays_the_grey_band_network_as_evaluate_plays_it(tmp_path, capsys):
+@pytest.mark.parametrize("network", ["small-coord-deep-stem", "small-coord-deep-stem-norm"])
+def test_cli_demo_plays_the_grey_band_network_as_evaluate_plays_it(network, tmp_path, capsys):
     """The "-stem" network's export (its grey bands a grouped Conv with fixed weights) runs in the Rust policy crate
     and plays the episodes torch plays: an untrained network (torch seed 0) whose policy head is scaled up, so that
-    its greedy actions are not near-ties."""
+    its greedy actions are not near-ties. So does "-norm"'s, whose graph holds ONNX's LayerNormalization."""
     import torch
 
     from chopperscape.learn import modelfile, networks, normalize
@@ -230,7 +231,7 @@ def test_cli_demo_plays_the_grey_band_network_as_evaluate_plays_it(tmp_path, cap
     if exe is None:
         pytest.skip("cargo is not installed: the comparison with `chopperscape demo --json` is skipped")
     torch.manual_seed(0)
-    network, shape = "small-coord-deep-stem", (42, 42, 4)
+    shape = (42, 42, 4)
     agent = networks.build_agent(network, shape, 5, invert_frames=True)
     with torch.no_grad():
         agent.actor[1].weight.mul_(300.0)  # type: ignore[index]

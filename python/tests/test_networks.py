@@ -217,6 +217,35 @@ def test_deep_adds_one_dense_layer_of_the_trunks_width():
 
 
 @needs_torch
+def test_conv3_adds_a_third_convolution_and_norm_a_layer_norm_after_each_dense_layer():
+    """"-conv3" is the stem network with a 3×3 stride-1 convolution of 32 maps after the second (9×9 maps at 42×42
+    become 7×7, so the first dense layer reads 7·7·32 inputs); "-norm" is it with a LayerNorm (a scale and a shift
+    of the width each) after each of its two dense layers, before the ReLU."""
+    from torch import nn
+
+    from chopperscape.learn.networks import build_agent
+
+    shape = (42, 42, 4)
+    base = build_agent("small-coord-deep-stem", shape)
+    conv3, norm = build_agent("small-coord-deep-stem-conv3", shape), build_agent("small-coord-deep-stem-norm", shape)
+
+    def count(agent) -> int:
+        return sum(p.numel() for p in agent.parameters())
+
+    def kinds(agent, kind) -> list:
+        return [m for m in agent.actor[0] if isinstance(m, kind)]
+
+    assert [c.stride for c in kinds(conv3, nn.Conv2d)][-1] == (1, 1) and len(kinds(conv3, nn.Conv2d)) == 3
+    assert count(conv3) - count(base) == (32 * 32 * 9 + 32) + 256 * (7 * 7 * 32 - 9 * 9 * 32)
+    assert len(kinds(norm, nn.LayerNorm)) == 2 and count(norm) - count(base) == 2 * 2 * 256
+    trunk = list(norm.actor[0])
+    for ln in kinds(norm, nn.LayerNorm):
+        at = trunk.index(ln)
+        assert isinstance(trunk[at - 1], nn.Linear) and isinstance(trunk[at + 1], nn.ReLU)
+    assert conv3.embedding_width == norm.embedding_width == 256
+
+
+@needs_torch
 def test_the_stem_gives_each_frame_its_grey_bands_and_learns_nothing_itself():
     """The "-stem" network's `Stem`: frame f's band k is relu(x_f − knot_k), with the frames' pixels read as the
     network reads them (inverted); it has no parameters, so the network differs from "small-coord-deep" only in

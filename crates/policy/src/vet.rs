@@ -31,6 +31,7 @@ pub const OPERATORS: &[&str] = &[
     "Gather",
     "Gemm",
     "Identity",
+    "LayerNormalization",
     "LogSoftmax",
     "MatMul",
     "Max",

@@ -181,9 +181,10 @@ class Keypoints(nn.Module):
 #: What a CNN network's name may add to its base ("small", "nature"): "-split" gives the critic a trunk of its own,
 #: "-coord" CoordConv's coordinates after the first convolution, "-keypoints" a spatial soft-argmax in place of the
 #: flattened maps, "-deep" a second dense layer of the same width after the first, "-stem" a per-pixel stem before
-#: the first convolution (:class:`Stem`). The names `Recipe.network` takes
-#: are in :data:`chopperscape.learn.recipe.NETWORKS`.
-VARIANTS = ("-split", "-coord", "-keypoints", "-deep", "-stem")
+#: the first convolution (:class:`Stem`), "-conv3" a third convolution (3×3, stride 1, as many maps as the second)
+#: before the dense layers, "-norm" a LayerNorm after each dense layer, before its ReLU. The names `Recipe.network`
+#: takes are in :data:`chopperscape.learn.recipe.NETWORKS`.
+VARIANTS = ("-split", "-coord", "-keypoints", "-deep", "-stem", "-conv3", "-norm")
 
 
 class CnnAgent(ActorCritic):
@@ -204,6 +205,8 @@ class CnnAgent(ActorCritic):
         stack = obs_shape[2] if len(obs_shape) == 3 else 1
         name = "small-42" if base == "small" and min(h, w) < 64 else base
         convs, width = CNNS[name]
+        if "conv3" in variants:  # a third convolution on the second's maps: local mixes of where things are
+            convs = [*convs, (convs[-1][0], 3, 1)]
         sizes = [(h, w)]
         for _, kernel, stride in convs:
             sizes.append(((sizes[-1][0] - kernel) // stride + 1, (sizes[-1][1] - kernel) // stride + 1))
@@ -229,9 +232,10 @@ class CnnAgent(ActorCritic):
                     layers.append(nn.ReLU())
                 channels = out
             read: nn.Module = Keypoints(sizes[-1]) if "keypoints" in variants else nn.Flatten()
-            layers += [read, _layer(nn.Linear(flat, width)), nn.ReLU()]
+            norm = "norm" in variants  # LayerNorm before each dense layer's ReLU (no learned scale's dead units)
+            layers += [read, _layer(nn.Linear(flat, width)), *([nn.LayerNorm(width)] if norm else []), nn.ReLU()]
             if "deep" in variants:  # a second dense layer: the heads read a nonlinear mix of where things are
-                layers += [_layer(nn.Linear(width, width)), nn.ReLU()]
+                layers += [_layer(nn.Linear(width, width)), *([nn.LayerNorm(width)] if norm else []), nn.ReLU()]
             return nn.Sequential(*layers)
 
         trunk = make_trunk()

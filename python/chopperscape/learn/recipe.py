@@ -236,6 +236,8 @@ NETWORKS = (
     "small-coord-deep",
     "small-coord-deep-split",
     "small-coord-deep-stem",
+    "small-coord-deep-stem-conv3",
+    "small-coord-deep-stem-norm",
 )
 
 
