@@ -218,7 +218,7 @@ def test_deep_adds_one_dense_layer_of_the_trunks_width():
 
 @needs_torch
 def test_conv3_adds_a_third_convolution_and_norm_a_layer_norm_after_each_dense_layer():
-    """"-conv3" is the stem network with a 3×3 stride-1 convolution of 32 maps after the second (9×9 maps at 42×42
+    """ "-conv3" is the stem network with a 3×3 stride-1 convolution of 32 maps after the second (9×9 maps at 42×42
     become 7×7, so the first dense layer reads 7·7·32 inputs); "-norm" is it with a LayerNorm (a scale and a shift
     of the width each) after each of its two dense layers, before the ReLU."""
     from torch import nn
