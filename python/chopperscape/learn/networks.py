@@ -194,7 +194,9 @@ class CnnAgent(ActorCritic):
     first convolution (:class:`Coords`), "-keypoints" reads the last maps as keypoints (:class:`Keypoints`), "-deep"
     adds a second dense layer (relative positions, such as the nearest tank's from the chopper, are a product of two
     positions: one ReLU layer after the maps gives the linear heads little to combine them with).
-    "-stem" reads each pixel's grey band before the first convolution (:class:`Stem`).
+    "-stem" reads each pixel's grey band before the first convolution (:class:`Stem`), "-conv3" adds a third
+    convolution (3×3, stride 1) and "-norm" a LayerNorm after each dense layer (issue 43's probes of both learned
+    less per decision; docs/notes/pixels-speed-and-probes.md).
     `actor(obs)` gives the logits and `critic(obs)` the value, as for :class:`Agent`."""
 
     def __init__(self, obs_shape: tuple[int, ...], num_actions: int, network: str, invert_frames: bool = False):
@@ -232,10 +234,17 @@ class CnnAgent(ActorCritic):
                     layers.append(nn.ReLU())
                 channels = out
             read: nn.Module = Keypoints(sizes[-1]) if "keypoints" in variants else nn.Flatten()
-            norm = "norm" in variants  # LayerNorm before each dense layer's ReLU (no learned scale's dead units)
-            layers += [read, _layer(nn.Linear(flat, width)), *([nn.LayerNorm(width)] if norm else []), nn.ReLU()]
+
+            def dense(inputs: int) -> list[nn.Module]:  # with "-norm", a LayerNorm between the layer and its ReLU
+                return [
+                    _layer(nn.Linear(inputs, width)),
+                    *([nn.LayerNorm(width)] if "norm" in variants else []),
+                    nn.ReLU(),
+                ]
+
+            layers += [read, *dense(flat)]
             if "deep" in variants:  # a second dense layer: the heads read a nonlinear mix of where things are
-                layers += [_layer(nn.Linear(width, width)), *([nn.LayerNorm(width)] if norm else []), nn.ReLU()]
+                layers += dense(width)
             return nn.Sequential(*layers)
 
         trunk = make_trunk()
