@@ -58,18 +58,18 @@ pub const OPERATORS: &[&str] = &[
 /// held to the same total, checked on the protobuf before tract computes them.
 pub const MAX_ELEMENTS: usize = 64 << 20;
 
-/// The most nodes a policy graph may have: 64. The recipe's MLP has 11 and its CNN 14; tract's analysis of a
-/// graph takes time superlinear in its length (a chain of 4,000 `Relu` took 32 s).
+/// The most nodes a policy graph may have: 64. The recipe's MLP has 11 and its pixel CNN 22 (24 with LayerNorm);
+/// tract's analysis of a graph takes time superlinear in its length (a chain of 4,000 `Relu` took 32 s).
 pub const MAX_NODES: usize = 64;
 
-/// The most initializers (weight tensors) a graph may have: 128 (the recipe's networks have 8).
+/// The most initializers (weight tensors) a graph may have: 128 (the recipe's MLP has 8, its pixel CNN 12).
 pub const MAX_INITIALIZERS: usize = 128;
 
 /// The most inputs one node may read: 8. The operators in [`OPERATORS`] take at most 3 (`Conv`, `Gemm`, `Clip`)
 /// and 5 (`Slice`); a `Concat` of shape pieces takes a few. A `Concat` of 1,000 inputs hung tract's analysis.
 pub const MAX_NODE_INPUTS: usize = 8;
 
-/// The most outputs one node may have: 4 (every operator in [`OPERATORS`] has one).
+/// The most outputs one node may have: 4 (the exports' nodes have one each; `LayerNormalization` may have 3).
 pub const MAX_NODE_OUTPUTS: usize = 4;
 
 /// The most attributes one node may carry: 16 (a `Conv` has 6).
