@@ -223,21 +223,21 @@ def test_conv3_adds_a_third_convolution_and_norm_a_layer_norm_after_each_dense_l
     of the width each) after each of its two dense layers, before the ReLU."""
     from torch import nn
 
-    from chopperscape.learn.networks import build_agent
+    from chopperscape.learn.networks import build_agent, parameter_count
 
     shape = (42, 42, 4)
-    base = build_agent("small-coord-deep-stem", shape)
     conv3, norm = build_agent("small-coord-deep-stem-conv3", shape), build_agent("small-coord-deep-stem-norm", shape)
 
-    def count(agent) -> int:
-        return sum(p.numel() for p in agent.parameters())
+    def count(network: str) -> int:
+        return parameter_count(network, shape, 128)
 
     def kinds(agent, kind) -> list:
         return [m for m in agent.actor[0] if isinstance(m, kind)]
 
     assert [c.stride for c in kinds(conv3, nn.Conv2d)][-1] == (1, 1) and len(kinds(conv3, nn.Conv2d)) == 3
-    assert count(conv3) - count(base) == (32 * 32 * 9 + 32) + 256 * (7 * 7 * 32 - 9 * 9 * 32)
-    assert len(kinds(norm, nn.LayerNorm)) == 2 and count(norm) - count(base) == 2 * 2 * 256
+    base = count("small-coord-deep-stem")
+    assert count("small-coord-deep-stem-conv3") - base == (32 * 32 * 9 + 32) + 256 * (7 * 7 * 32 - 9 * 9 * 32)
+    assert len(kinds(norm, nn.LayerNorm)) == 2 and count("small-coord-deep-stem-norm") - base == 2 * 2 * 256
     trunk = list(norm.actor[0])
     for ln in kinds(norm, nn.LayerNorm):
         at = trunk.index(ln)
