@@ -175,6 +175,7 @@ EARLIER_PIXELS = {
     "update_epochs": 2,
     "num_minibatches": 4,
     "learning_rate": 1e-3,
+    "vf_coef": 0.5,
     "total_steps": 10_000_000,
 }
 
@@ -182,7 +183,13 @@ EARLIER_PIXELS = {
 @pytest.mark.parametrize(
     "seed, name, flags",
     [
-        *((s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2}) for s in range(5)),
+        # Issue 43's probes of the value loss at weight 1.0 (the preset since the twelfth session), one thread each.
+        *((s, f"p43-vf1-seed{s}", {"torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
+        # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
+        *(
+            (s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2, "vf_coef": 0.5})
+            for s in range(5)
+        ),
         # The earlier preset's runs (issue 28's three seeds), with the flags that give its learning settings back.
         (0, "tf42-p3-e2-lr1e-3", EARLIER_PIXELS),
         (1, "tf42-p3-seed1", EARLIER_PIXELS),

@@ -51,8 +51,9 @@ RECIPE_FLAGS = (
 #: the 42×42 agent view (pixel layout 3), grayscale, 4 stacked, each action held for 4 frames (env steps then
 #: count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995 per frame
 #: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 1 epoch of 16 minibatches at a
-#: learning rate of 2e-3 over an 8 M decision schedule (an hour of the 2-core machine with ``--torch-compile
-#: --torch-threads 2``, the speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the
+#: learning rate of 2e-3 with the value loss at weight 1.0 (twice the default's 0.5; since the twelfth session),
+#: over an 8 M decision schedule (an hour of the 2-core machine with ``--torch-compile --torch-threads 2``, the
+#: speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the
 #: small CNN reading each frame as three grey bands (the stem), with CoordConv's coordinates and a second dense
 #: layer (:mod:`chopperscape.learn.networks`). Chosen by issue 43's probes
 #: (docs/notes/pixels-speed-and-probes.md); until the ninth session the preset was the teacher-free probes' p3 (the
@@ -81,6 +82,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "num_minibatches": 16,
         "gae_lambda": 0.98,
         "learning_rate": 2e-3,
+        "vf_coef": 1.0,
         "total_steps": 8_000_000,
     },
     "pixels-teacher": {
