@@ -19,7 +19,7 @@ main() {
   mkdir -p "$out"
   nvidia-smi --query-gpu=name,memory.total --format=csv,noheader >"$out/machine.txt" 2>&1 || true
   echo "$(nproc) CPUs: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2)" >>"$out/machine.txt"
-  /usr/bin/time -f "%e %U %S" -o "$out/time.txt" "$PY" -m chopperscape.learn.train --preset pixels-large \
+  /usr/bin/time -f "%e %U %S" -o "$out/time.txt" "$PY" -m chopperscape.learn.train --preset "${PRESET:-pixels-large}" \
     --device cuda "$compile" --env-threads "$threads" --torch-threads 4 --seed "$seed" --minutes "$minutes" \
     --out "$out/run" >"$out/train.log" 2>&1
   decisions=$(tail -n 1 "$out/run/progress.csv" | cut -d, -f1)
