@@ -111,7 +111,9 @@ PRESETS["fast"] = {
 }
 #: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 4× the envs, so that each
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
-#: Not yet measured on a GPU with the current pixel preset (no task here has drawn one since it changed).
+#: Measured once on an H200 with 16 cores (issue 43, twelfth session; docs/curves/pixels-probes/gpu43-large.*):
+#: 67,040 decisions a second with ``--env-threads 12 --torch-compile``, the 8 M schedule in 2 minutes, 3,435 held
+#: out on seed 0: a quarter of ``pixels``' updates over the same decisions learns less per decision.
 PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
 
 #: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
