@@ -183,7 +183,9 @@ EARLIER_PIXELS = {
 @pytest.mark.parametrize(
     "seed, name, flags",
     [
-        # Issue 43's probes of the value loss at weight 1.0 (the preset since the twelfth session), one thread each.
+        # Issue 43's target runs of the twelfth session (the preset with the speed flags), and the probes of the
+        # value loss at weight 1.0 that made it the preset, one thread each.
+        *((s, f"p43-target-vf1-seed{s}", {"torch_compile": True, "torch_threads": 2}) for s in range(4)),
         *((s, f"p43-vf1-seed{s}", {"torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(

@@ -4,7 +4,8 @@
 # decision schedule; then the held-out evaluation of the model it reached (100 greedy episodes from seed
 # 1,000,000, v0 rules at frame skip 4, as the target's protocol). Decisions a second and minutes to a training
 # return of 7,000 are read from OUT/run/progress.csv (`wall_s` beside `env_steps` and `mean_return`).
-#   bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] [ENV_THREADS] [--no-torch-compile]
+#   [PRESET=pixels] bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] [ENV_THREADS] [--no-torch-compile]
+# (PRESET: another preset in place of pixels-large, on the same GPU and flags.)
 # The speed flags are the machine's: torch.compile, and env threads for its cores (a speed setting: the native
 # vector env gives the same frames for any thread count). chopperscape must be importable (the lent machine of
 # 2026-11-28 had torch but neither chopperscape nor gymnasium: the session carried their wheels, see the notes).
