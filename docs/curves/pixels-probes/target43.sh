@@ -1,20 +1,20 @@
 #!/usr/bin/env bash
-# Issue 43's target protocol for one training seed: the candidate recipe (RECIPE below: the pixel preset, since
-# the ninth session the grey bands, CoordConv and a second dense layer, `small-coord-deep-stem`, one epoch of 16
-# minibatches at lr 2e-3, since the twelfth session the value loss at weight 1.0; with torch.compile, on both
-# cores; the fifth session's `small-coord` candidate until the
-# eighth) trained ALONE on the 2-core machine for its 8 M-decision schedule (what an hour alone holds at about 2,400
-# decisions a second), started in RUNS/seed-SEED or resumed from its checkpoint there; then the held-out evaluation
-# (100 greedy episodes from seed 1,000,000, v0 rules at frame skip 4) of the model it has so far, written to
-# RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to RUNS/target.csv: seed, decisions, wall and CPU
-# seconds of this call's training, the held-out mean, and how the episodes ended. Run nothing else meanwhile: the
-# wall time is the claim (a run's numbers do not depend on the machine's load, its wall time does). A run folder
-# lives on this machine only (runs/ is not committed): a seed cut by a session's end restarts from scratch in the
-# next session, so start one only with more than its hour left.
+# Issue 43's target protocol for one training seed: the candidate recipe (RECIPE below: the pixel preset, since the
+# ninth session the grey bands, CoordConv and a second dense layer, `small-coord-deep-stem`, one epoch of 16
+# minibatches at lr 2e-3, since the twelfth session the value loss at weight 1.0; with torch.compile, on both cores;
+# the fifth session's `small-coord` candidate until the eighth) trained ALONE on the 2-core machine for its 8
+# M-decision schedule (what an hour alone holds at about 2,400 decisions a second), started in RUNS/seed-SEED or
+# resumed from its checkpoint there; then the held-out evaluation (100 greedy episodes from seed 1,000,000, v0 rules
+# at frame skip 4) of the model it has so far, written to RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to
+# RUNS/target.csv: seed, decisions, wall and CPU seconds of this call's training, the held-out mean, and how the
+# episodes ended. Run nothing else meanwhile: the wall time is the claim (a run's numbers do not depend on the
+# machine's load, its wall time does). A run folder lives on this machine only (runs/ is not committed): a seed cut by
+# a session's end restarts from scratch in the next session, so start one only with more than its hour left.
 #   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
 # The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
 # The body is one function, which bash reads whole before it runs: an edit of this file cannot change a call
-# that is already running (bash reads a plain script as it goes).
+# that is already running (bash reads a plain script as it goes); bash may then report a syntax error after `main`
+# returns, its results already written (seen in the twelfth session).
 main() {
   set -euo pipefail
   cd "$(dirname "$0")/../../.."

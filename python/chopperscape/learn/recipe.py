@@ -53,9 +53,9 @@ RECIPE_FLAGS = (
 #: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 1 epoch of 16 minibatches at a
 #: learning rate of 2e-3 with the value loss at weight 1.0 (twice the default's 0.5; since the twelfth session),
 #: over an 8 M decision schedule (an hour of the 2-core machine with ``--torch-compile --torch-threads 2``, the
-#: speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the
-#: small CNN reading each frame as three grey bands (the stem), with CoordConv's coordinates and a second dense
-#: layer (:mod:`chopperscape.learn.networks`). Chosen by issue 43's probes
+#: speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the small CNN reading each
+#: frame as three grey bands (the stem), with CoordConv's coordinates and a second dense layer
+#: (:mod:`chopperscape.learn.networks`). Chosen by issue 43's probes
 #: (docs/notes/pixels-speed-and-probes.md); until the ninth session the preset was the teacher-free probes' p3 (the
 #: plain small CNN, 2 epochs of 4 minibatches at 1e-3 over 10 M; docs/notes/teacher-free-probes-second-round.md),
 #: whose runs ``--network small --update-epochs 2 --num-minibatches 4 --learning-rate 1e-3 --steps 10000000``
