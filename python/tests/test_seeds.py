@@ -141,6 +141,35 @@ def test_seeds_summarise_reads_another_trainers_evaluations_and_refuses_mismatch
     assert "--summarise DIR takes no --seeds" in capsys.readouterr().err
 
 
+def test_seeds_summarise_plays_the_baselines_under_the_presets_rules(tmp_path, capsys):
+    """`--summarise DIR --preset P`: the baselines play P's frame skip, as the runner plays them for P's seeds (the
+    heuristic at frame skip 1 scores half what it scores at 4), and P's budget is the summary's; flags that are not
+    the rules are refused by name, and nothing is written."""
+    from chopperscape.learn import seeds
+
+    folder = tmp_path / "pixels"
+    folder.mkdir()
+    result = {"seed": 1_000_000, "episodes": 2, "mean_return": 900.0, "std_return": 1.0, "min_return": 899}
+    result |= {"max_return": 901, "mean_steps": 900.0, "causes": {"bird": 1.0}}
+    (folder / "seed-0.eval.json").write_text(json.dumps(result))
+    (folder / "seed-0.csv").write_text("env_steps,wall_s,episodes,mean_return\n100,1,1,5\n")
+    for refused, named in [
+        (["--preset", "pixels", "--ent-coef", "0.02"], "--summarise DIR takes no"),
+        (["--option", "obs_size=[42,42]"], "--option obs_size does not change the game's rules"),
+    ]:
+        with pytest.raises(SystemExit):
+            seeds.main(["--summarise", str(folder), "--eval-episodes", "2", *refused])
+        assert named in capsys.readouterr().err and not (folder / "summary.json").exists()
+    assert seeds.main(["--summarise", str(folder), "--eval-episodes", "2", "--preset", "pixels"]) == 0
+    heuristic = json.loads((folder / "baseline-heuristic.json").read_text())
+    assert heuristic["runner"]["option"] == ["frame_skip=4"]
+    assert json.loads((folder / "summary.json").read_text())["steps"] == 8_000_000
+    # The same folder under other rules: the cached baselines are played again under them, not reused.
+    assert seeds.main(["--summarise", str(folder), "--eval-episodes", "2", "--option", "lives=3"]) == 0
+    heuristic = json.loads((folder / "baseline-heuristic.json").read_text())
+    assert heuristic["runner"]["option"] == ["lives=3"] and heuristic["mean_return"] > 0
+
+
 def test_seeds_runner_trains_with_the_command_line_when_given_cli(tmp_path, capsys):
     """`--cli PATH`: each seed is trained by `PATH train` (the Rust learner) and its `model.onnx` played by `PATH demo
     --json` on the held-out seeds, summarised as `evaluate` summarises; only --preset is passed on. A stand-in

@@ -27,10 +27,13 @@ Other trainers' runs (SB3, RLlib) are summarised the same way from their files: 
 ``DIR/seed-K.eval.json`` (``python -m chopperscape.learn.evaluate`` output, or ``rllib_ppo.py --eval-out``) and
 ``DIR/seed-K.csv`` (a progress CSV with ``env_steps`` and ``mean_return``) for every ``K`` there, evaluates the
 baselines on the same held-out seeds (kept in ``DIR/baseline-NAME.json``) and writes the same three files into
-``DIR``; ``--title`` names the trainer in the plot. Every file is checked before anything is played or written: a bad
-one is refused by name (exit 2) and nothing is written:
+``DIR``; ``--title`` names the trainer in the plot. The baselines play the rules the seeds were evaluated under:
+``--preset NAME`` (its frame skip, and its budget unless ``--steps``) and ``--option NAME=VALUE`` for the game's
+rules only; nothing else is taken. Every file is checked before anything is played or written: a bad one is refused
+by name (exit 2) and nothing is written:
 
     python -m chopperscape.learn.seeds --summarise docs/curves/rllib-3seeds --steps 5000000 --title "RLlib PPO"
+    python -m chopperscape.learn.seeds --summarise DIR --preset pixels --title "PPO, frames alone"
 """
 
 from __future__ import annotations
@@ -197,6 +200,16 @@ def _baseline(name: str, a: argparse.Namespace) -> dict[str, Any]:
     return result
 
 
+def _options(options: list[str]) -> list[str]:
+    """`--option NAME=VALUE` flags, as `train` takes them."""
+    return [x for o in options for x in ("--option", o)]
+
+
+def _rules(env_options: dict[str, Any]) -> list[str]:
+    """What of a recipe's env options changes the game's rules (frame skip, lives, …), as `evaluate` takes them."""
+    return [f"{k}={json.dumps(v)}" for k, v in env_options.items() if k in RULE_OPTIONS]
+
+
 def _only_a_preset(flags: list[str]) -> bool:
     """Whether `flags` is nothing, `--preset NAME` or `--preset=NAME`: all the Rust learner takes through `--cli`."""
     return (
@@ -246,9 +259,22 @@ def main(argv: list[str] | None = None) -> int:
     if a.jobs is not None and not 1 <= a.jobs <= 1024:
         p.error(f"--jobs {a.jobs}: allowed an integer in 1..=1024")
     if a.summarise is not None:
-        if a.seeds or a.out or forward:
-            p.error("--summarise DIR takes no --seeds, --out or training flags: it reads what DIR holds")
-        a.steps = DEFAULT_STEPS if a.steps is None else a.steps
+        if a.seeds or a.out or a.cli or not _only_a_preset(forward):
+            p.error(
+                "--summarise DIR takes no --seeds, --out, --cli or training flags: it reads what DIR holds (only "
+                "--preset NAME and --option NAME=VALUE, the rules its seeds were trained and evaluated under)"
+            )
+        # The baselines play the rules the seeds were evaluated under, as the runner plays them: a preset's frame
+        # skip, say (a pixel or fast run against the heuristic at frame skip 1 would flatter neither).
+        refused = sorted(o.split("=", 1)[0] for o in a.option if o.split("=", 1)[0] not in RULE_OPTIONS)
+        if refused:
+            p.error(
+                f"--summarise: --option {', '.join(refused)} does not change the game's rules; allowed: "
+                f"{', '.join(sorted(RULE_OPTIONS))}"
+            )
+        _, recipe = flags.parse(["--out", str(a.summarise), "--force", *forward, *_options(a.option)])
+        a.rules = _rules(recipe.env_options)
+        a.steps = recipe.total_steps if a.steps is None else a.steps
         return run_command(lambda: summarise_folder(a))
     if a.seeds is None or a.out is None:
         p.error("--seeds and --out are required (or --summarise DIR)")
@@ -257,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
             p.error(
                 f"--cli {a.cli}: not an executable file (the chopperscape command line: target/release/chopperscape)"
             )
-        passed = forward + [x for o in a.option for x in ("--option", o)]
+        passed = forward + _options(a.option)
         if not _only_a_preset(passed):
             p.error(
                 f"--cli trains a preset of the Rust learner: only --preset NAME is passed on, not {' '.join(passed)}"
@@ -274,7 +300,7 @@ def main(argv: list[str] | None = None) -> int:
     jobs = a.jobs or max(1, min(len(seeds), os.cpu_count() or 1))
     if os.path.lexists(a.out) and not a.out.is_dir():
         p.error(f"--out {a.out} is not a folder")
-    forward = forward + [x for o in a.option for x in ("--option", o)]
+    forward = forward + _options(a.option)
     # Every training flag checked here, as `train` will (exit 2 naming it), before any seed is trained.
     first = ["--out", str(a.out / f"seed-{seeds[0]}"), "--seed", str(seeds[0])]
     if a.steps is not None:
@@ -286,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         p.error(str(err))
     # The baselines play the rules the seeds train on (a preset's frame skip included), as `evaluate` plays a model.
-    a.rules = [f"{k}={json.dumps(v)}" for k, v in recipe.env_options.items() if k in RULE_OPTIONS]
+    a.rules = _rules(recipe.env_options)
     if recipe.teacher:
         from . import guidance  # torch: only to read the teacher
 
@@ -347,7 +373,7 @@ def summarise_folder(a: argparse.Namespace) -> int:
             raise ValueError(f"no training curve for every seed: {curve} missing")
         read_curve(curve)
         curves[s] = curve
-    a.out, a.option, a.rules = folder, [], []
+    a.out = folder
     for name in ("random", "heuristic"):
         if os.path.lexists(folder / f"baseline-{name}.json"):
             read_eval(folder / f"baseline-{name}.json")
