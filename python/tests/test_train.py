@@ -180,12 +180,44 @@ EARLIER_PIXELS = {
 }
 
 
+#: The target's seeds trained and collected so far (docs/curves/pixels-seeds/target.csv has each one's line).
+TARGET_SEEDS = (0, 1, 2, 3)
+
+
+def _target_set(seed: int) -> str:
+    """The folder of docs/curves/pixels-seeds a target seed is collected into: training seeds or never tuned on."""
+    return "0-4" if seed < 100 else "100-104"
+
+
+def test_the_targets_collected_seeds_are_the_ones_checked_here():
+    """Every seed with a line in the target's table has its curve, recipe and evaluation, and its recipe is checked
+    against the preset below (TARGET_SEEDS), so a seed collected later cannot escape that check."""
+    import csv
+    import pathlib
+
+    seeds_dir = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / "pixels-seeds"
+    with open(seeds_dir / "target.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert tuple(sorted(int(r["seed"]) for r in rows)) == TARGET_SEEDS
+    for r in rows:
+        folder = seeds_dir / _target_set(int(r["seed"]))
+        for ext in ("csv", "recipe.json", "eval.json"):
+            assert (folder / f"seed-{r['seed']}.{ext}").is_file()
+        evaluation = json.loads((folder / f"seed-{r['seed']}.eval.json").read_text())
+        assert (evaluation["episodes"], evaluation["seed"], evaluation["greedy"]) == (100, 1_000_000, True)
+        assert f"{evaluation['mean_return']:.1f}" == r["mean_return"]
+
+
 @pytest.mark.parametrize(
     "seed, name, flags",
     [
-        # Issue 43's target runs of the twelfth session (the preset with the speed flags), and the probes of the
-        # value loss at weight 1.0 that made it the preset, one thread each.
-        *((s, f"p43-target-vf1-seed{s}", {"torch_compile": True, "torch_threads": 2}) for s in range(4)),
+        # Issue 43's target runs since the twelfth session (the preset with the speed flags; every seed collected
+        # into docs/curves/pixels-seeds by collect_target.py), and the probes of the value loss at weight 1.0 that
+        # made it the preset, one thread each.
+        *(
+            (s, f"../pixels-seeds/{_target_set(s)}/seed-{s}", {"torch_compile": True, "torch_threads": 2})
+            for s in TARGET_SEEDS
+        ),
         *((s, f"p43-vf1-seed{s}", {"torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(

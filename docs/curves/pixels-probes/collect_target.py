@@ -1,0 +1,91 @@
+"""Issue 43's target, collected and summarised: every finished seed of RUNS (the folder `target43.sh` trains into) is
+copied into `docs/curves/pixels-seeds/SET/` (SET `0-4`, the training seeds, or `100-104`, never tuned on) as
+`seed-K.csv` (its training curve), `seed-K.recipe.json` and `seed-K.eval.json` (the held-out evaluation of its final
+model); its line of `RUNS/target.csv` (decisions, wall and CPU seconds, how the episodes ended) goes into
+`docs/curves/pixels-seeds/target.csv` with the machine it ran on, replacing that seed's earlier line; then each set is
+summarised by the multi-seed runner (`python -m chopperscape.learn.seeds --summarise SET --preset pixels`: the IQM of
+the seeds' held-out means with its 95 % bootstrap interval, the baselines at the preset's frame skip), written into
+the set's folder as `summary.md`, `summary.json` and `curves.png`.
+
+    python docs/curves/pixels-probes/collect_target.py RUNS [--machine TEXT]
+
+Nothing is copied from a seed whose evaluation is missing (a run cut before its end); a seed outside both sets is
+refused by name.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+OUT = ROOT / "docs" / "curves" / "pixels-seeds"
+SETS = {"0-4": range(5), "100-104": range(100, 105)}
+FIELDS = ["seed", "decisions", "wall_s", "cpu_s", "mean_return", "bird", "fuel", "truncated", "machine"]
+
+
+def this_machine() -> str:
+    """`N-vCPU MODEL`, with `(AVX-512)` where the CPU has it (the two machines of these sessions differ by it)."""
+    info = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").is_file() else ""
+    model = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("model name")), "?")
+    return f"{os.cpu_count()}-vCPU {model}" + (" (AVX-512)" if " avx512f" in info else "")
+
+
+def set_of(seed: int) -> str:
+    for name, seeds in SETS.items():
+        if seed in seeds:
+            return name
+    raise ValueError(f"seed {seed} is in neither set of the target (allowed: 0-4 and 100-104)")
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("runs", type=Path, help="target43.sh's folder: target.csv and seed-K/")
+    p.add_argument("--machine", default=None, help="what the seeds ran on (default: this machine's CPU)")
+    a = p.parse_args()
+    machine = a.machine or this_machine()
+    with open(a.runs / "target.csv", newline="") as f:
+        new = list(csv.DictReader(f))
+    table = OUT / "target.csv"
+    rows: dict[int, dict[str, str]] = {}
+    if table.is_file():
+        with open(table, newline="") as f:
+            rows = {int(r["seed"]): r for r in csv.DictReader(f)}
+    touched = set()
+    for row in new:
+        seed, decisions = int(row["seed"]), row["decisions"]
+        run, folder = a.runs / f"seed-{seed}", OUT / set_of(seed)
+        evaluation = run / f"eval-{decisions}.json"
+        if not evaluation.is_file():
+            print(f"seed {seed}: {evaluation} missing; not collected", file=sys.stderr)
+            continue
+        folder.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(run / "progress.csv", folder / f"seed-{seed}.csv")
+        shutil.copyfile(run / "recipe.json", folder / f"seed-{seed}.recipe.json")
+        # The evaluation as `evaluate` wrote it, with the training's wall time (as the multi-seed runner adds it).
+        doc = json.loads(evaluation.read_text())
+        (folder / f"seed-{seed}.eval.json").write_text(json.dumps({**doc, "train_wall_s": float(row["wall_s"])}))
+        rows[seed] = {**row, "machine": machine}
+        touched.add(folder.name)
+    with open(table, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows[s] for s in sorted(rows))
+    for name in sorted(touched):
+        title = f"PPO, frames alone, seeds {name}"
+        cmd = [sys.executable, "-m", "chopperscape.learn.seeds", "--summarise", str(OUT / name), "--preset", "pixels"]
+        subprocess.run([*cmd, "--title", title], check=True)
+        for log in (OUT / name).glob("baseline-*.log"):
+            if log.stat().st_size == 0:  # the baselines' evaluations said nothing
+                log.unlink()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
