@@ -31,6 +31,11 @@ MAX_EVAL_BYTES = 16 << 20
 MAX_NUMBER = 1e15
 
 
+def _seeds(n: int, kind: str = "") -> str:
+    """`1 seed`, `3 seeds` (`kind`: a word before it, such as `training `)."""
+    return f"{n} {kind}seed{'' if n == 1 else 's'}"
+
+
 def _json_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a number JSON allows")
 
@@ -164,8 +169,9 @@ def markdown(summary: dict[str, Any]) -> str:
     n = len(summary["per_seed"])
     lines += [
         "",
-        f"**IQM {summary['iqm']:,.0f} [95 % CI {lo:,.0f}–{hi:,.0f}]** over {n} seeds; median {summary['median']:,.0f}, "
-        f"mean {summary['mean']:,.0f}, worst seed {summary['min']:,.0f}; {summary['above_heuristic']} of {n} above the "
+        f"**IQM {summary['iqm']:,.0f} [95 % CI {lo:,.0f}–{hi:,.0f}]** over {_seeds(n)}; "
+        f"median {summary['median']:,.0f}, mean {summary['mean']:,.0f}, worst seed {summary['min']:,.0f}; "
+        f"{summary['above_heuristic']} of {n} above the "
         f"heuristic ({summary['baselines']['heuristic']['mean_return']:,.0f}).",
         "",
     ]
@@ -194,7 +200,7 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any], title: str =
     ok = ~np.isnan(stack).any(axis=1)
     mid = iqm(stack[ok])
     lo, hi = bootstrap_ci(stack[ok], resamples=2_000)
-    ax.plot(grid[ok] / 1e6, mid, color="tab:blue", linewidth=2, label=f"IQM of {len(curves)} seeds (95 % CI band)")
+    ax.plot(grid[ok] / 1e6, mid, color="tab:blue", linewidth=2, label=f"IQM of {_seeds(len(curves))} (95 % CI band)")
     ax.fill_between(grid[ok] / 1e6, lo, hi, color="tab:blue", alpha=0.2, linewidth=0)
     for name, b in summary["baselines"].items():
         ax.axhline(b["mean_return"], linestyle="--", color="grey", linewidth=1)
@@ -210,7 +216,7 @@ def plot(out: Path, runs: dict[int, Path], summary: dict[str, Any], title: str =
     ax.set_xlabel("env steps (millions)")
     ax.set_ylabel("mean return, last 100 training episodes")
     ax.set_title(
-        f"ChopperScape-v0 {title}: {len(curves)} training seeds "
+        f"ChopperScape-v0 {title}: {_seeds(len(curves), 'training ')} "
         f"(held-out IQM {summary['iqm']:,.0f} [{summary['iqm_ci95'][0]:,.0f}–{summary['iqm_ci95'][1]:,.0f}])",
         fontsize="medium",
     )
