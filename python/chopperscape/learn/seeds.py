@@ -266,7 +266,7 @@ def main(argv: list[str] | None = None) -> int:
             )
         # The baselines play the rules the seeds were evaluated under, as the runner plays them: a preset's frame
         # skip, say (a pixel or fast run against the heuristic at frame skip 1 would flatter neither).
-        refused = sorted(o.split("=", 1)[0] for o in a.option if o.split("=", 1)[0] not in RULE_OPTIONS)
+        refused = sorted({o.split("=", 1)[0] for o in a.option} - set(RULE_OPTIONS))
         if refused:
             p.error(
                 f"--summarise: --option {', '.join(refused)} does not change the game's rules; allowed: "
