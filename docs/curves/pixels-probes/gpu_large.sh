@@ -4,8 +4,11 @@
 # decision schedule; then the held-out evaluation of the model it reached (100 greedy episodes from seed
 # 1,000,000, v0 rules at frame skip 4, as the target's protocol). Decisions a second and minutes to a training
 # return of 7,000 are read from OUT/run/progress.csv (`wall_s` beside `env_steps` and `mean_return`).
-#   [PRESET=pixels] bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] [ENV_THREADS] [--no-torch-compile]
-# (PRESET: another preset in place of pixels-large, on the same GPU and flags.)
+#   [PRESET=pixels] [FLAGS="--steps 32000000"] bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] \
+#       [ENV_THREADS] [--no-torch-compile]
+# (PRESET: another preset in place of pixels-large, on the same GPU and flags; FLAGS: more training flags, split on
+# spaces, e.g. a longer schedule.) The evaluation is cut after EVAL_SECONDS (default 240) so that a lease's command
+# ends in its limit; OUT/run/model.pt can then be evaluated elsewhere by the same command.
 # The speed flags are the machine's: torch.compile, and env threads for its cores (a speed setting: the native
 # vector env gives the same frames for any thread count). chopperscape must be importable (the lent machine of
 # 2026-11-28 had torch but neither chopperscape nor gymnasium: the session carried their wheels, see the notes).
@@ -22,9 +25,10 @@ main() {
   echo "$(nproc) CPUs: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2)" >>"$out/machine.txt"
   /usr/bin/time -f "%e %U %S" -o "$out/time.txt" "$PY" -m chopperscape.learn.train --preset "${PRESET:-pixels-large}" \
     --device cuda "$compile" --env-threads "$threads" --torch-threads 4 --seed "$seed" --minutes "$minutes" \
-    --out "$out/run" >"$out/train.log" 2>&1
+    --out "$out/run" ${FLAGS:-} >"$out/train.log" 2>&1
   decisions=$(tail -n 1 "$out/run/progress.csv" | cut -d, -f1)
-  "$PY" -m chopperscape.learn.evaluate "$out/run/model.pt" --episodes 100 --seed 1000000 >"$out/eval-$decisions.json"
+  timeout "${EVAL_SECONDS:-240}" "$PY" -m chopperscape.learn.evaluate "$out/run/model.pt" --episodes 100 --seed 1000000 \
+    >"$out/eval-$decisions.json" || echo "evaluation cut after ${EVAL_SECONDS:-240} s" >&2
   "$PY" - "$out/run/progress.csv" <<'EOF'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
