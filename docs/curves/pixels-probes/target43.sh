@@ -10,7 +10,9 @@
 # episodes ended. Run nothing else meanwhile: the wall time is the claim (a run's numbers do not depend on the
 # machine's load, its wall time does). A run folder lives on this machine only (runs/ is not committed): a seed cut by
 # a session's end restarts from scratch in the next session, so start one only with more than its hour left.
-#   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES]
+#   bash docs/curves/pixels-probes/target43.sh SEED RUNS [MINUTES] [-- TRAINING_FLAGS...]
+# TRAINING_FLAGS (after `--`) follow the recipe on a fresh start, so a candidate (`-- --steps 12000000`) runs by the
+# same protocol; a resumed run takes its flags from its checkpoint, and flags given then are refused.
 # The target: seeds 0-4 and 100-104, each under 60 minutes, IQM >= 7,000 on each set of five, none below 4,000.
 # The body is one function, which bash reads whole before it runs: an edit of this file cannot change a call
 # that is already running (bash reads a plain script as it goes); bash may then report a syntax error after `main`
@@ -25,13 +27,25 @@ main() {
   RECIPE=(--preset pixels --torch-compile --torch-threads 2)
   seed=${1:?a training seed}
   runs=${2:?a folder for the runs}
-  minutes=${3:-60}
+  shift 2
+  minutes=60
+  if [ $# -gt 0 ] && [ "$1" != -- ]; then
+    minutes=$1
+    shift
+  fi
+  if [ "${1:-}" = -- ]; then shift; fi
+  local flags=("$@")
   out=$runs/seed-$seed
   mkdir -p "$runs"
   if [ -f "$out/resume.pt" ]; then
+    if [ ${#flags[@]} -gt 0 ]; then
+      echo "target43.sh: $out resumes with its checkpoint's recipe; training flags (${flags[*]}) are not allowed" >&2
+      return 2
+    fi
     cmd=("$PY" -m chopperscape.learn.train --resume "$out" --minutes "$minutes")
   else
-    cmd=("$PY" -m chopperscape.learn.train "${RECIPE[@]}" --seed "$seed" --minutes "$minutes" --out "$out")
+    cmd=("$PY" -m chopperscape.learn.train "${RECIPE[@]}" "${flags[@]}" --seed "$seed" --minutes "$minutes"
+      --out "$out")
   fi
   /usr/bin/time -f "%e %U %S" -o "$runs/.time-$seed" "${cmd[@]}" >/dev/null
   read -r wall user sys <"$runs/.time-$seed"
