@@ -181,7 +181,7 @@ EARLIER_PIXELS = {
 
 
 #: The target's seeds trained and collected so far (docs/curves/pixels-seeds/target.csv has each one's line).
-TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102)
+TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 
 
 def _target_set(seed: int) -> str:
@@ -246,6 +246,31 @@ def test_the_pixel_preset_is_the_recipe_the_targets_ran(seed, name, flags):
     preset = dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **flags}, seed=seed))
     assert ran == preset
     assert (ran["teacher"], ran["aux_coef"], ran["recon_coef"]) == ("", 0.0, 0.0)
+
+
+GPU_FLAGS = {"device": "cuda", "torch_compile": True, "env_threads": 12, "torch_threads": 4}
+
+
+@pytest.mark.parametrize(
+    "seed, name, flags",
+    [
+        # Issue 43's GPU runs (`docs/curves/pixels-probes/gpu_large.sh`, an H200 with 16 cores): the fourteenth
+        # session's on the preset's 28 M schedule, and the twelfth session's on the 8 M one it had then.
+        *((s, f"gpu43-large28m-seed{s}", GPU_FLAGS) for s in (0, 1)),
+        (0, "gpu43-large", {**GPU_FLAGS, "total_steps": 8_000_000}),
+    ],
+)
+def test_the_large_pixel_preset_is_the_recipe_the_gpu_runs_ran(seed, name, flags):
+    """The GPU figures in docs/learning.md are of `--preset pixels-large --device cuda` with the speed flags: their
+    committed recipes are the preset with that seed and those flags, field for field."""
+    import dataclasses
+    import pathlib
+
+    from chopperscape.learn.recipe import LATER_SETTINGS, PRESETS, Recipe
+
+    curves = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / "pixels-probes"
+    ran = {**LATER_SETTINGS, **json.loads((curves / f"{name}.recipe.json").read_text())}
+    assert ran == dataclasses.asdict(Recipe(**{**PRESETS["pixels-large"], **flags}, seed=seed))
 
 
 @needs_torch

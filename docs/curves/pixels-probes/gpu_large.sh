@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Issue 43's optional GPU figure: `--preset pixels-large --device cuda` (the pixel preset with 256 envs and 8
-# minibatches of 4,096 samples), one run alone on a GPU machine, for MINUTES of wall time on the preset's 8 M
-# decision schedule; then the held-out evaluation of the model it reached (100 greedy episodes from seed
+# minibatches of 4,096 samples), one run alone on a GPU machine, for MINUTES of wall time on the preset's schedule
+# (28 M decisions since the fourteenth session, about 6 minutes on an H200 with 12 env threads; 8 M before); then the held-out evaluation of the model it reached (100 greedy episodes from seed
 # 1,000,000, v0 rules at frame skip 4, as the target's protocol). Decisions a second and minutes to a training
 # return of 7,000 are read from OUT/run/progress.csv (`wall_s` beside `env_steps` and `mean_return`).
 #   [PRESET=pixels] [FLAGS="--steps 32000000"] bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] \
@@ -15,7 +15,7 @@
 main() {
   set -euo pipefail
   out=${1:?an output folder}
-  minutes=${2:-6}
+  minutes=${2:-8}
   seed=${3:-0}
   threads=${4:-8}
   compile=${5:---torch-compile}

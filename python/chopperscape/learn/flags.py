@@ -127,8 +127,8 @@ def _parser() -> argparse.ArgumentParser:
         choices=sorted(PRESETS),
         default=None,
         help="recipe preset: features (the default), fast (features at frame skip 4, learning in minutes), pixels "
-        "(42x42 grayscale frames alone, a CNN), pixels-large (the same with 256 envs, for --device cuda) or "
-        "pixels-teacher (84x84 frames, for a features --teacher); flags override it",
+        "(42x42 grayscale frames alone, a CNN), pixels-large (the same with 256 envs over 28 M decisions, for "
+        "--device cuda) or pixels-teacher (84x84 frames, for a features --teacher); flags override it",
     )
     defaults = Recipe()
     for f in RECIPE_FLAGS:

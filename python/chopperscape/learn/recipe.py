@@ -110,11 +110,19 @@ PRESETS["fast"] = {
     "total_steps": 3_000_000,
 }
 #: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 4× the envs, so that each
-#: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env.
-#: Measured once on an H200 with 16 cores (issue 43, twelfth session; docs/curves/pixels-probes/gpu43-large.*):
-#: 67,040 decisions a second with ``--env-threads 12 --torch-compile``, the 8 M schedule in 2 minutes, 3,435 held
-#: out on seed 0: a quarter of ``pixels``' updates over the same decisions learns less per decision.
-PRESETS["pixels-large"] = {**PRESETS["pixels"], "num_envs": 256, "num_minibatches": 8, "env_threads": 2}
+#: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env,
+#: over a 28 M-decision schedule. Measured on an H200 with 16 cores (issue 43; docs/curves/pixels-probes/gpu43-*):
+#: on the 8 M schedule of `pixels` (twelfth session) 67,040 decisions a second with ``--env-threads 12
+#: --torch-compile`` and 3,435 held out on seed 0 (a quarter of `pixels`' updates over the same decisions); on 28 M
+#: (fourteenth session, 855 updates) 77,000–80,000 decisions a second, the schedule in 6 minutes, a training return
+#: of 7,000 (over the last 1 M) after 2.3–3.7 minutes, and held out 10,656 (seed 0) and 19,065 (seed 1, at 23 M).
+PRESETS["pixels-large"] = {
+    **PRESETS["pixels"],
+    "num_envs": 256,
+    "num_minibatches": 8,
+    "env_threads": 2,
+    "total_steps": 28_000_000,
+}
 
 #: The largest model file the tools read (`evaluate`, `export`, `--teacher`): the pixel recipe's is 2.7 MB. A recipe
 #: model's claimed network must also fit the weights it holds before it is built (`modelfile.agent_from_checkpoint`).
