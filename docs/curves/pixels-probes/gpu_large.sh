@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Issue 43's optional GPU figure: `--preset pixels-large --device cuda` (the pixel preset with 256 envs and 8
 # minibatches of 4,096 samples), one run alone on a GPU machine, for MINUTES of wall time on the preset's schedule
-# (28 M decisions since the fourteenth session, about 6 minutes on an H200 with 12 env threads; 8 M before); then the held-out evaluation of the model it reached (100 greedy episodes from seed
-# 1,000,000, v0 rules at frame skip 4, as the target's protocol). Decisions a second and minutes to a training
-# return of 7,000 are read from OUT/run/progress.csv (`wall_s` beside `env_steps` and `mean_return`).
+# (28 M decisions since the fourteenth session, about 6 minutes on an H200 with 12 env threads; 8 M before); then
+# the held-out evaluation of the model it reached (100 greedy episodes from seed 1,000,000, v0 rules at frame skip
+# 4, as the target's protocol). Decisions a second and minutes to a training return of 7,000 are read from
+# OUT/run/progress.csv (`wall_s` beside `env_steps` and `mean_return`).
 #   [PRESET=pixels] [FLAGS="--steps 32000000"] bash docs/curves/pixels-probes/gpu_large.sh OUT [MINUTES] [SEED] \
 #       [ENV_THREADS] [--no-torch-compile]
 # (PRESET: another preset in place of pixels-large, on the same GPU and flags; FLAGS: more training flags, split on
@@ -27,8 +28,14 @@ main() {
     --device cuda "$compile" --env-threads "$threads" --torch-threads 4 --seed "$seed" --minutes "$minutes" \
     --out "$out/run" ${FLAGS:-} >"$out/train.log" 2>&1
   decisions=$(tail -n 1 "$out/run/progress.csv" | cut -d, -f1)
-  timeout "${EVAL_SECONDS:-240}" "$PY" -m chopperscape.learn.evaluate "$out/run/model.pt" --episodes 100 --seed 1000000 \
-    >"$out/eval-$decisions.json" || echo "evaluation cut after ${EVAL_SECONDS:-240} s" >&2
+  local limit=${EVAL_SECONDS:-240} rc=0
+  timeout "$limit" "$PY" -m chopperscape.learn.evaluate "$out/run/model.pt" --episodes 100 --seed 1000000 \
+    >"$out/eval-$decisions.json" || rc=$?
+  if [ $rc = 124 ]; then
+    echo "evaluation cut after $limit s" >&2
+  elif [ $rc != 0 ]; then
+    echo "evaluation failed ($rc)" >&2
+  fi
   "$PY" - "$out/run/progress.csv" <<'EOF'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
