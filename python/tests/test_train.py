@@ -229,7 +229,10 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
         ),
         *((s, f"p43-vf1-seed{s}", {"torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
         # The fourteenth session's longer schedule, by the target's protocol (`target43.sh 102 RUNS -- --steps ...`).
-        (102, "p43-steps12m-seed102", {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000}),
+        *(
+            (s, f"p43-steps12m-seed{s}", {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000})
+            for s in (102, 103)
+        ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
             (s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2, "vf_coef": 0.5})
