@@ -4,8 +4,10 @@ Smoke sizes only: learning itself is a benchmark (README, docs/learning.md)."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -184,18 +186,24 @@ EARLIER_PIXELS = {
 TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 
 
-def _target_set(seed: int) -> str:
-    """The folder of docs/curves/pixels-seeds a target seed is collected into (training seeds or never tuned on), by
-    the collector's own rule (`collect_target.set_of`, a standard-library script loaded from its file)."""
+@functools.cache
+def _collect_target() -> Any:
+    """docs/curves/pixels-probes/collect_target.py (a standard-library script), loaded once from its file."""
     import importlib.util
     import pathlib
 
     path = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / "pixels-probes" / "collect_target.py"
     spec = importlib.util.spec_from_file_location("collect_target", path)
     assert spec is not None and spec.loader is not None
-    collect_target = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(collect_target)
-    return str(collect_target.set_of(seed))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _target_set(seed: int) -> str:
+    """The folder of docs/curves/pixels-seeds a target seed is collected into (training seeds or never tuned on), by
+    the collector's own rule (`collect_target.set_of`)."""
+    return str(_collect_target().set_of(seed))
 
 
 def test_the_targets_collected_seeds_are_the_ones_checked_here():
