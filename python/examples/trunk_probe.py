@@ -48,7 +48,8 @@ PROBED = [
 
 def collect(model: Any, samples: int, num_envs: int, seed: int, networks: dict[str, Any]) -> dict[str, np.ndarray]:
     """`samples` decisions of `model` playing greedily from seeds `seed + i`: each network's embeddings of the
-    frames (by name), and the features of the same states."""
+    frames (by name), the features of the same states and whether each decision ended its episode (`ended`); rows
+    in step order, `num_envs` a step."""
     import torch
     from gymnasium.vector import AutoresetMode
 
@@ -64,6 +65,7 @@ def collect(model: Any, samples: int, num_envs: int, seed: int, networks: dict[s
     feats, _ = twin.reset(seed=seed)
     kept: dict[str, list[np.ndarray]] = {name: [] for name in networks}
     features: list[np.ndarray] = []
+    ended: list[np.ndarray] = []
     try:
         while sum(len(f) for f in features) < samples:
             x = torch.from_numpy(obs.reshape(num_envs, *model.obs_shape))
@@ -78,11 +80,13 @@ def collect(model: Any, samples: int, num_envs: int, seed: int, networks: dict[s
             feats, r2, term2, trunc2, _ = twin.step(actions)
             if not (np.array_equal(r, r2) and np.array_equal(term, term2) and np.array_equal(trunc, trunc2)):
                 raise RuntimeError("the pixel env and its features twin parted")
+            ended.append(term | trunc)
     finally:
         pixels.close()
         twin.close()
     out = {name: np.concatenate(v)[:samples] for name, v in kept.items()}
     out["features"] = np.concatenate(features)[:samples]
+    out["ended"] = np.concatenate(ended)[:samples]  # whether the decision taken in that state ended its episode
     return out
 
 

@@ -99,3 +99,34 @@ def test_the_trunk_probe_reads_values_out_of_a_pixel_policys_embedding(tmp_path)
     for row in rows:  # a smoke size: the figures (docs/notes/pixels-speed-and-probes.md) need 20,000 decisions
         for value in ("fuel", "chopper_y", "bird0_dx", "tank0_dy"):
             assert -10.0 < float(row[value]) <= 1.0, row
+
+
+def test_the_flight_probe_says_where_a_pixel_policy_flies():
+    pytest.importorskip("torch", reason="torch is not installed: the flight probe's smoke test is skipped")
+    row = _example("flight_probe.py", str(ROOT / "models" / "ppo-pixels.pt"), "--decisions", "400", "--envs", "8")
+    assert row["decisions"] == 400
+    for key in ("height_q10_q50_q90", "column_q10_q50_q90"):
+        low, mid, high = row[key]
+        assert 0.0 <= low <= mid <= high <= 1.0, row
+    assert 0.0 <= row["upper_third"] <= 1.0 and 0.0 <= row["tank_reachable"] <= 1.0 and row["refuels_per_1000"] >= 0
+
+
+def test_the_flight_probe_counts_a_refuel_but_not_a_reset():
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location("flight_probe", ROOT / "python" / "examples" / "flight_probe.py")
+    assert spec is not None and spec.loader is not None
+    probe = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(probe)
+    # Two envs, four steps: env 0 refuels between steps 1 and 2; env 1's episode ends at step 1 and restarts full.
+    features = np.zeros((8, 46), np.float32)
+    features[:, probe.FUEL] = [0.5, 0.3, 0.49, 0.29, 1.0, 1.0, 0.99, 0.99]
+    features[0::2, probe.CHOPPER_Y] = 0.0  # env 0 at the top, env 1 at the bottom
+    features[1::2, probe.CHOPPER_Y] = 1.0
+    ended = np.zeros(8, bool)
+    ended[3] = True  # env 1's decision at step 1 ended its episode
+    row = probe.flight(features, ended, 2)
+    assert row["refuels_per_1000"] == 1000.0 * 1 / 8
+    assert row["upper_third"] == 0.5 and row["decisions"] == 8
