@@ -20,7 +20,7 @@ pytestmark = pytest.mark.skipif(
 #: The progress columns that do not depend on the wall clock.
 SAME = (
     "env_steps", "episodes", "mean_return", "entropy", "approx_kl", "value_loss", "policy_loss",
-    "aux_loss", "recon_loss",
+    "aux_loss", "recon_loss", "rnd_loss", "novelty",
 )  # fmt: skip
 
 
@@ -83,8 +83,10 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch):
     assert a["obs_rms"] == b["obs_rms"] and a["env_steps"] == b["env_steps"]
 
 
-@pytest.mark.parametrize(("aux_coef", "recon_coef"), [(0.0, 0.0), (0.5, 0.0), (0.0, 2.0)])
-def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef):
+@pytest.mark.parametrize(
+    ("aux_coef", "recon_coef", "rnd_coef"), [(0.0, 0.0, 0.0), (0.5, 0.0, 0.0), (0.0, 2.0, 0.0), (0.0, 0.0, 0.5)]
+)
+def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef):
     from chopperscape.learn import train
     from chopperscape.learn.recipe import Recipe
 
@@ -97,6 +99,7 @@ def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux
         num_minibatches=2,
         aux_coef=aux_coef,
         recon_coef=recon_coef,
+        rnd_coef=rnd_coef,
         augment="shift",
         total_steps=4 * 16 * 5,
     )
@@ -106,6 +109,7 @@ def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux
     assert len(whole) >= 5 and parts == whole
     assert all(bool(r["aux_loss"]) == (aux_coef > 0) for r in whole)
     assert all(bool(r["recon_loss"]) == (recon_coef > 0) for r in whole)
+    assert all(bool(r["rnd_loss"]) == (rnd_coef > 0) for r in whole)
 
 
 def test_resume_refuses_what_it_cannot_continue(tmp_path, capsys):

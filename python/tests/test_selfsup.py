@@ -91,7 +91,7 @@ def test_older_resume_states_still_resume_and_a_decoder_goes_only_where_it_belon
     from chopperscape.learn.selfsup import NoFramesLoss, Reconstruction
     from chopperscape.learn.state import LATER_FIELDS
 
-    assert LATER_FIELDS == {"frames_loss": None}
+    assert LATER_FIELDS == {"frames_loss": None, "novelty": None}
     NoFramesLoss().load_state_dict(LATER_FIELDS["frames_loss"])
     rec = Reconstruction(1.0, 8, (4, 6, 2), invert=True, device="cpu")
     with pytest.raises(ValueError, match="holds a reconstruction decoder"):

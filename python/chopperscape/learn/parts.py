@@ -3,7 +3,8 @@
 does to each minibatch, and the guidance from the game's features — so that the loop never asks which variant it
 runs. Plain PPO's guidance is :class:`Unguided`, which does nothing; the features twin, auxiliary head and teacher
 (:mod:`.guidance`) are imported only for a recipe that asks for them. The self-supervised loss from the frames
-(:mod:`.selfsup`) is a part of its own, apart from the guidance: it reads nothing but the frames.
+(:mod:`.selfsup`) and the exploration bonus from the frames (:mod:`.novelty`) are parts of their own, apart from
+the guidance: they read nothing but the frames.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from .augment import augmentation
 from .compiled import Network, network_for
 from .networks import ActorCritic, CnnAgent, build_agent, parameter_count
 from .normalize import ObsNormalizer
+from .novelty import novelty_of
 from .recipe import MAX_PARAMETERS, MAX_ROLLOUT_BYTES, Recipe, network_of
 from .rollout import Rollout
 from .selfsup import frames_loss
@@ -81,6 +83,9 @@ class Parts(NamedTuple):
     net: Network
     #: A self-supervised loss from the frames alone (:mod:`.selfsup`): `loss(frames, embedding)` per minibatch.
     frames_loss: Any
+    #: An exploration bonus from the frames alone (:mod:`.novelty`): `bonus(raw, valid)` per env step, added to the
+    #: scaled reward, and `loss(frames)` per minibatch (its predictor's).
+    novelty: Any
 
 
 def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
@@ -134,4 +139,5 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
         device,
         net,
         frames_loss(recipe, width, obs_shape, device),
+        novelty_of(recipe, obs_shape, device),
     )

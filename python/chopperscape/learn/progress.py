@@ -13,7 +13,9 @@ they have no per-update diagnostics of their own). Readers: ``python -m choppers
 - :data:`GUIDANCE`: the pixel recipes' training-only losses, means over the update's minibatches, blank when off: the
   auxiliary features loss (``--aux-coef``) and KL(teacher ‖ policy) (``--teacher``);
 - :data:`SELF_SUPERVISED`: the loss from the frames alone (``--recon-coef``), its mean over the update's minibatches
-  before the weight, blank when off.
+  before the weight, blank when off;
+- :data:`NOVELTY`: the exploration bonus's (``--rnd-coef``): its predictor's loss, mean over the update's
+  minibatches, and the mean raw bonus (the prediction error) of the rollout's steps, blank when off.
 
 A run's CSV written before a column group was added resumes: its rows are kept with the new columns blank.
 """
@@ -35,10 +37,13 @@ DIAGNOSTICS = ("learning_rate", "entropy", "approx_kl", "clip_frac", "explained_
 ENDINGS = ("ended", "bird", "fuel", "limit")
 GUIDANCE = ("aux_loss", "teacher_kl")
 SELF_SUPERVISED = ("recon_loss",)
+NOVELTY = ("rnd_loss", "novelty")
 #: The columns ``chopperscape.learn.train`` writes, in order.
-COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE + SELF_SUPERVISED
+COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE + SELF_SUPERVISED + NOVELTY
 #: The columns of the CSVs written before :data:`SELF_SUPERVISED` (they resume, the new columns blank).
 OLDER_COLUMNS = RETURNS + DIAGNOSTICS + ENDINGS + GUIDANCE
+#: Every header an earlier version wrote, oldest first: before :data:`SELF_SUPERVISED`, before :data:`NOVELTY`.
+OLDER_HEADERS = (OLDER_COLUMNS, OLDER_COLUMNS + SELF_SUPERVISED)
 #: The largest progress CSV read (a 15-million-step run of the recipe writes about 200 KB).
 MAX_BYTES = 64 << 20
 
@@ -73,7 +78,7 @@ class Writer:
                 rows = list(csv.reader(f))
         except (UnicodeDecodeError, csv.Error, OSError) as e:
             raise ValueError(f"{path}: not a progress CSV this trainer wrote ({e})") from None
-        if not rows or tuple(rows[0]) not in (COLUMNS, OLDER_COLUMNS):
+        if not rows or tuple(rows[0]) not in (COLUMNS, *OLDER_HEADERS):
             raise ValueError(f"{path}: not a progress CSV this trainer wrote (its header differs)")
         at, width, pad = COLUMNS.index("env_steps"), len(rows[0]), [""] * (len(COLUMNS) - len(rows[0]))
         keep = [r + pad for r in rows[1:] if len(r) == width and r[at].isdigit() and int(r[at]) <= env_steps]

@@ -44,6 +44,7 @@ RECIPE_FLAGS = (
     "teacher_fade",
     "torch_compile",
     "recon_coef",
+    "rnd_coef",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -217,11 +218,15 @@ class Recipe:
     #: reconstructs each minibatch's latest frame (at half size) from the trunk's embedding
     #: (:mod:`chopperscape.learn.selfsup`). Training only: the saved model has no decoder. 0 (the default): none.
     recon_coef: float = 0.0
+    #: CNN recipes only: weight of an exploration bonus from the frames alone, Random Network Distillation's
+    #: prediction error on each step's latest frame, scaled by its running spread and added to the step's reward
+    #: (:mod:`chopperscape.learn.novelty`). Training only: the saved model has neither network. 0 (the default): none.
+    rnd_coef: float = 0.0
 
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
 #: (:func:`chopperscape.learn.rundir.recipe_hash`) leaves them out at that value, so those folders still resume.
-LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0, "lr_floor": LR_FLOOR}
+LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0, "lr_floor": LR_FLOOR, "rnd_coef": 0.0}
 
 #: `--option` names the recipe sets itself, and what to use instead.
 RESERVED_OPTIONS = {
@@ -305,6 +310,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("max_grad_norm", r.max_grad_norm, 0.0, 1e9, low_open=True)
     number_in("aux_coef", r.aux_coef, 0.0, 1000.0)
     number_in("recon_coef", r.recon_coef, 0.0, 1000.0)
+    number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
     number_in("teacher_coef", r.teacher_coef, 0.0, 1000.0)
     number_in("teacher_fade", r.teacher_fade, 0.0, 1.0, low_open=True)
     if not isinstance(r.teacher, str):
@@ -328,6 +334,11 @@ def check_recipe(recipe: Recipe) -> None:
     if r.recon_coef > 0 and mlp:
         raise ValueError(
             f"invalid value {r.recon_coef!r} for option `recon_coef`: the reconstruction loss is for CNN recipes "
+            "(pixel observations); allowed 0 here"
+        )
+    if r.rnd_coef > 0 and mlp:
+        raise ValueError(
+            f"invalid value {r.rnd_coef!r} for option `rnd_coef`: the novelty bonus is for CNN recipes "
             "(pixel observations); allowed 0 here"
         )
     if r.augment != "none" and mlp:

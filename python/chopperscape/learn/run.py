@@ -156,7 +156,7 @@ class Run(contextlib.AbstractContextManager["Run"]):
         self._closing.callback(envs.close)
         parts = parts_of(recipe, envs, teacher)
         self._closing.callback(parts.guide.close)
-        params = list(parts.agent.parameters()) + parts.guide.params + parts.frames_loss.params
+        params = list(parts.agent.parameters()) + parts.guide.params + parts.frames_loss.params + parts.novelty.params
         n = recipe.num_envs
         state = TrainState(
             agent=parts.agent,
@@ -167,6 +167,7 @@ class Run(contextlib.AbstractContextManager["Run"]):
             envs=EnvBatch(envs),
             guidance=parts.guide,
             frames_loss=parts.frames_loss,
+            novelty=parts.novelty,
             rng=rng,
             torch_rng=TorchRng(),
             clock=Clock(),

@@ -30,7 +30,7 @@ from .rundir import RECIPE_KEY, check_recipe_hash, recipe_hash
 RESUME_FORMAT = "chopperscape-ppo-resume/2"
 #: Fields added after resume states existed, with what an older state stands for (the part's state when off), so
 #: that older run folders still resume; a run whose recipe turns the part on has a recipe hash no older state has.
-LATER_FIELDS: dict[str, Any] = {"frames_loss": None}
+LATER_FIELDS: dict[str, Any] = {"frames_loss": None, "novelty": None}
 
 
 class EnvBatch:
@@ -102,6 +102,7 @@ class TrainState:
     envs: EnvBatch
     guidance: Any  # the recipe's guidance part (parts.Unguided for plain PPO)
     frames_loss: Any  # the recipe's self-supervised part (selfsup.NoFramesLoss when off)
+    novelty: Any  # the recipe's exploration bonus (novelty.NoNovelty when off)
     rng: np.random.Generator  # the minibatch permutations
     torch_rng: TorchRng
     clock: Clock

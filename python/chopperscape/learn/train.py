@@ -120,7 +120,7 @@ def train(
                 s.env_steps += int(valid.sum())
                 s.episodes.record(reward, valid, term, trunc, info)
                 done = term | trunc
-                buf.outcome(t, s.rewards(reward, valid, done), done)
+                buf.outcome(t, s.rewards(reward, valid, done) + p.novelty.bonus(raw, valid), done)
                 s.next_done = done
                 s.next_obs = encode(raw)
 
@@ -145,7 +145,8 @@ def train(
                     ent = entropy.mean()
                     extra, guided = guide.loss(idx, logits, h, s.env_steps)
                     own, learned = p.frames_loss.loss(x, h)
-                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra + own
+                    predictor, novel = p.novelty.loss(x)
+                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra + own + predictor
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {s.update}")
                     optimizer.zero_grad()
@@ -163,6 +164,7 @@ def train(
                             "policy_loss": pg.item(),
                             **guided,
                             **learned,
+                            **novel,
                         }
                     )
             s.update += 1

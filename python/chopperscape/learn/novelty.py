@@ -1,0 +1,175 @@
+"""An exploration bonus from the frames alone, a part the training loop calls (`Recipe.rnd_coef`): Random Network
+Distillation (Burda et al. 2019, "Exploration by Random Network Distillation"). A fixed, randomly initialised CNN
+(the target) maps each frame to 128 numbers; a second CNN (the predictor) learns to match it on the frames the agent
+sees. Where the agent has often been, the predictor is right; where it has seldom been, it is wrong, and its error
+is the bonus added to the step's reward. Nothing privileged: the frames are the agent's own, as the policy sees
+them.
+
+Why here: issue 43's stalled seed 102 flies at the bottom of the sky, where tanks are born and rise away, while
+every other seed flies at the top, where every tank comes to it (`python/examples/flight_probe.py`;
+docs/notes/pixels-speed-and-probes.md, fifteenth session). Entropy spreads a policy where it is; a novelty bonus
+pulls it toward the frames it has not seen, the ones at the other end of the sky.
+
+As CleanRL's `ppo_rnd_envpool.py` does, save what the 2-core pixel loop asks: the latest frame of each stack, each
+pixel standardised by running statistics and clipped to ±5; the error (mean squared over the 128 outputs) divided by
+the running standard deviation of its discounted sum (γ 0.99, not cut at episode ends); the predictor trained on
+every minibatch. Unlike the paper, one value head: the bonus, times `rnd_coef`, is added to the step's scaled
+reward and cut at episode ends (the paper's second, non-episodic head is a later option if this one shows promise).
+Training only: neither network is part of the policy, the saved model or its export.
+
+:func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, cast
+
+import numpy as np
+
+try:
+    import torch
+    from torch import nn
+except ImportError as err:  # pragma: no cover - exercised only without torch
+    raise ImportError(
+        "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
+    ) from err
+
+from .normalize import RunningMeanStd
+from .recipe import Recipe
+
+#: The discount of the bonus's running sum, the one its scale is taken from (the paper's γ_I).
+GAMMA_INTRINSIC = 0.99
+#: The width of the target's output.
+OUTPUT_WIDTH = 128
+
+
+class NoNovelty:
+    """No bonus: no parameters, no columns, no state."""
+
+    @property
+    def params(self) -> list[nn.Parameter]:
+        return []
+
+    def bonus(self, raw: np.ndarray, valid: np.ndarray) -> float:
+        return 0.0
+
+    def loss(self, x: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
+        return torch.zeros(()), {}
+
+    def state_dict(self) -> None:
+        return None
+
+    def load_state_dict(self, s: Any) -> None:
+        if s is not None:
+            raise ValueError("it holds a novelty bonus's networks, and this recipe has none (rnd_coef 0)")
+
+
+def _cnn(size: tuple[int, int], head: list[int]) -> nn.Sequential:
+    """Two convolutions (16 maps 4×4 stride 2, 32 maps 4×4 stride 2, leaky ReLUs) on one frame, then dense layers
+    of widths `head` (ReLUs between them)."""
+    h, w = size
+    for _ in range(2):
+        h, w = (h - 4) // 2 + 1, (w - 4) // 2 + 1
+    layers: list[nn.Module] = [nn.Conv2d(1, 16, 4, 2), nn.LeakyReLU(), nn.Conv2d(16, 32, 4, 2), nn.LeakyReLU()]
+    layers.append(nn.Flatten())
+    width = 32 * h * w
+    for i, out in enumerate(head):
+        if i:
+            layers.append(nn.ReLU())
+        layers.append(nn.Linear(width, out))
+        width = out
+    for m in layers:
+        if isinstance(m, (nn.Conv2d, nn.Linear)):
+            nn.init.orthogonal_(m.weight, math.sqrt(2))
+            nn.init.zeros_(cast(torch.Tensor, m.bias))
+    return nn.Sequential(*layers)
+
+
+class RandomDistillation:
+    """The bonus of a fixed random target and a predictor that learns it, on the latest frame of each stack."""
+
+    def __init__(self, coef: float, obs_shape: tuple[int, ...], num_envs: int, seed: int, device: Any):
+        h, w = obs_shape[:2]
+        if min(h, w) < 10:
+            raise ValueError(f"frames of {h}×{w} are too small for the novelty bonus's networks (at least 10×10)")
+        self.coef, self.device = coef, device
+        # Its own random stream: the networks are drawn inside a fork of torch's, so the policy's initialisation
+        # and the action sampling stay what they are without the bonus.
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(seed + 0x52D)
+            self.target = _cnn((h, w), [OUTPUT_WIDTH]).to(device)
+            self.predictor = _cnn((h, w), [256, 256, OUTPUT_WIDTH]).to(device)
+        self.target.requires_grad_(False)
+        self.params = list(self.predictor.parameters())
+        self.frames = RunningMeanStd((h, w))  # each pixel's running mean and variance
+        self.errors = RunningMeanStd(())  # of the bonus's discounted running sum
+        self.running = np.zeros(num_envs)
+        self.last: list[float] = []  # the raw errors since the last update, for the progress columns
+        self.reported = 0.0
+
+    def _input(self, x: torch.Tensor) -> torch.Tensor:
+        """`(N, 1, H, W)`: each stack's latest frame (uint8, ``(N, H, W)`` or ``(N, H, W, k)``), standardised by the
+        running statistics and clipped to ±5."""
+        latest = (x if x.dim() == 3 else x[..., -1]).float()
+        mean = torch.as_tensor(self.frames.mean, dtype=torch.float32, device=latest.device)
+        std = torch.as_tensor(np.sqrt(self.frames.var + 1e-8), dtype=torch.float32, device=latest.device)
+        return ((latest - mean) / std).clamp(-5.0, 5.0).unsqueeze(1)
+
+    def _error(self, x: torch.Tensor) -> torch.Tensor:
+        return ((self.predictor(self._input(x)) - self.target(self._input(x))) ** 2).mean(-1)
+
+    def bonus(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The weighted bonus of each env's step that led to `raw` (the observations the step returned), 0 on reset
+        steps; the frame statistics and the bonus's scale are updated with the valid ones."""
+        latest = raw if raw.ndim == 3 else raw[..., -1]
+        if valid.any():
+            self.frames.update(latest[valid].astype(np.float64))
+        with torch.inference_mode():
+            error = self._error(torch.from_numpy(raw).to(self.device)).double().cpu().numpy()
+        self.running = np.where(valid, self.running * GAMMA_INTRINSIC + error, self.running)
+        if valid.any():
+            self.errors.update(self.running[valid])
+            self.last.extend(error[valid].tolist())
+        scaled = error / math.sqrt(float(self.errors.var) + 1e-8)
+        return np.where(valid, self.coef * scaled, 0.0).astype(np.float32)
+
+    def loss(self, x: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
+        """The predictor's loss on a minibatch (the target fixed), unweighted: it trains only the predictor, whose
+        parameters nothing else reads. The columns add `novelty`, the mean raw error of the valid steps of the
+        rollout this update learns from."""
+        if self.last:  # the update's first minibatch: the rollout's steps are all in
+            self.reported, self.last = float(np.mean(self.last)), []
+        err = self._error(x).mean()
+        return err, {"rnd_loss": err.item(), "novelty": self.reported}
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "target": {k: v.detach().cpu() for k, v in self.target.state_dict().items()},
+            "predictor": {k: v.detach().cpu() for k, v in self.predictor.state_dict().items()},
+            "frames": self.frames.state(),
+            "errors": self.errors.state(),
+            "running": self.running.tolist(),
+        }
+
+    def load_state_dict(self, s: Any) -> None:
+        if not isinstance(s, dict):
+            raise ValueError("it holds no novelty bonus's networks, and this recipe has one (rnd_coef > 0)")
+        running = np.asarray(s["running"], dtype=np.float64)
+        if running.shape != self.running.shape:
+            raise ValueError(
+                f"the novelty bonus's sums of {running.shape} envs, where the run has {self.running.shape}"
+            )
+        self.target.load_state_dict(s["target"])
+        self.predictor.load_state_dict(s["predictor"])
+        frames = RunningMeanStd.from_state(s["frames"])
+        frames.mean, frames.var = frames.mean.reshape(self.frames.mean.shape), frames.var.reshape(self.frames.var.shape)
+        self.frames, self.errors, self.running = frames, RunningMeanStd.from_state(s["errors"]), running
+
+
+def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any) -> Any:
+    """The exploration part `recipe` asks for: :class:`RandomDistillation` when `rnd_coef` > 0 (a CNN recipe:
+    :func:`~.recipe.check_recipe` refuses it for features), else :class:`NoNovelty`."""
+    if recipe.rnd_coef <= 0:
+        return NoNovelty()
+    return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)

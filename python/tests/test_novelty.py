@@ -1,0 +1,130 @@
+"""`--rnd-coef`: the exploration bonus from the frames alone (`chopperscape.learn.novelty`, Random Network
+Distillation). The bonus is the predictor's error on the latest frame, larger on frames it has not learned, 0 on
+reset steps; the predictor trains, the run resumes (tests/test_resume.py) and saves the same kind of policy; the
+networks leave torch's random stream as it is; the setting is refused where it means nothing."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+from conftest import pixel_recipe
+
+pytestmark = pytest.mark.skipif(
+    importlib.util.find_spec("torch") is None, reason="torch is not installed (scripts/test-python.sh installs it)"
+)
+
+
+def _recipe(**kw):
+    return pixel_recipe(**{"total_steps": 4 * 16 * 6, **kw})
+
+
+def _frames(n: int, row: int, stack: int = 2) -> np.ndarray:
+    """`n` stacks of white 16×16 frames with a black bar across `row` in the latest one."""
+    x = np.full((n, 16, 16, stack), 255, np.uint8)
+    x[:, row : row + 3, :, -1] = 0
+    return x
+
+
+def test_the_bonus_is_larger_on_frames_the_predictor_has_not_learned_and_0_on_reset_steps():
+    import torch
+
+    from chopperscape.learn.novelty import RandomDistillation
+
+    rnd = RandomDistillation(0.5, (16, 16, 2), num_envs=8, seed=3, device="cpu")
+    optimizer = torch.optim.Adam(rnd.params, lr=1e-3)
+    seen, unseen = _frames(8, 2), _frames(8, 11)
+    valid = np.ones(8, bool)
+    for _ in range(4):  # the statistics see both kinds of frame; the predictor learns only the first
+        rnd.bonus(seen, valid), rnd.bonus(unseen, valid)
+    for _ in range(200):
+        loss, row = rnd.loss(torch.from_numpy(seen))
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+    assert set(row) == {"rnd_loss", "novelty"} and row["rnd_loss"] < 0.01
+    known, new = rnd.bonus(seen, valid), rnd.bonus(unseen, valid)
+    assert known.dtype == np.float32 and known.shape == (8,)
+    assert (new > 10 * known).all() and (known > 0).all()
+    valid[[1, 5]] = False  # reset steps: no bonus, and the running sums stay
+    before = rnd.running.copy()
+    out = rnd.bonus(unseen, valid)
+    assert out[1] == 0 and out[5] == 0 and (out[valid] > 0).all()
+    assert rnd.running[1] == before[1] and rnd.running[0] != before[0]
+
+
+def test_the_bonus_reads_only_the_latest_frame_and_its_weight_scales_it():
+    from chopperscape.learn.novelty import RandomDistillation
+
+    a = RandomDistillation(1.0, (16, 16, 2), num_envs=4, seed=3, device="cpu")
+    b = RandomDistillation(2.0, (16, 16, 2), num_envs=4, seed=3, device="cpu")
+    x = _frames(4, 6)
+    y = x.copy()
+    y[..., 0] = 0  # another older frame: the same bonus
+    valid = np.ones(4, bool)
+    out_a, out_b = a.bonus(x, valid), b.bonus(y, valid)
+    assert np.allclose(2 * out_a, out_b)
+    single = RandomDistillation(1.0, (16, 16), num_envs=4, seed=3, device="cpu")  # no stack axis
+    assert np.allclose(single.bonus(x[..., -1], valid), out_a)
+
+
+def test_making_the_networks_leaves_torchs_random_stream_as_it_is():
+    import torch
+
+    from chopperscape.learn.novelty import RandomDistillation
+
+    torch.manual_seed(7)
+    expected = torch.rand(3)
+    torch.manual_seed(7)
+    a = RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=0, device="cpu")
+    assert torch.equal(torch.rand(3), expected)
+    b = RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=0, device="cpu")
+    c = RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=1, device="cpu")
+    weights = [m[0].weight for m in (a.target, b.target, c.target)]
+    assert torch.equal(weights[0], weights[1]) and not torch.equal(weights[0], weights[2])
+    assert not a.target[0].weight.requires_grad and all(p.requires_grad for p in a.params)
+
+
+def test_a_run_with_it_logs_it_and_saves_the_same_kind_of_policy(tmp_path):
+    import csv
+
+    import torch
+
+    from chopperscape.learn import train
+
+    plain = train.train(_recipe(), tmp_path / "plain")
+    rnd = train.train(_recipe(rnd_coef=0.5), tmp_path / "rnd")
+    with open(tmp_path / "rnd" / "progress.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    losses, novelty = [float(r["rnd_loss"]) for r in rows], [float(r["novelty"]) for r in rows]
+    # Finite and positive (that the predictor learns is the first test's: here new sprites keep appearing).
+    assert len(rows) == 6 and all(0 < v < 1e3 for v in losses + novelty)
+    with open(tmp_path / "plain" / "progress.csv", newline="") as f:
+        assert all(r["rnd_loss"] == "" and r["novelty"] == "" for r in csv.DictReader(f))
+    a, b = torch.load(plain, weights_only=True), torch.load(rnd, weights_only=True)
+    assert set(a) == set(b) and set(a["actor"]) == set(b["actor"])  # no RND networks in the policy file
+    assert not all(torch.equal(a["actor"][k], b["actor"][k]) for k in a["actor"])  # the bonus changed learning
+    assert json.loads((tmp_path / "rnd" / "recipe.json").read_text())["rnd_coef"] == 0.5
+
+
+def test_it_is_refused_where_it_means_nothing_before_anything_is_written(tmp_path):
+    from chopperscape.learn import train
+    from chopperscape.learn.novelty import NoNovelty, RandomDistillation
+    from chopperscape.learn.recipe import Recipe
+
+    with pytest.raises(ValueError, match=r"`rnd_coef`: the novelty bonus is for CNN recipes"):
+        train.train(Recipe(rnd_coef=1.0), tmp_path / "a")
+    with pytest.raises(ValueError, match=r"rnd_coef"):
+        train.train(_recipe(rnd_coef=-1.0), tmp_path / "b")
+    with pytest.raises(ValueError, match=r"too small for the novelty bonus"):
+        RandomDistillation(1.0, (8, 8, 2), num_envs=2, seed=0, device="cpu")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+    rnd = RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=0, device="cpu")
+    with pytest.raises(ValueError, match="holds a novelty bonus"):
+        NoNovelty().load_state_dict(rnd.state_dict())
+    with pytest.raises(ValueError, match="holds no novelty bonus"):
+        rnd.load_state_dict(None)
+    with pytest.raises(ValueError, match="sums of"):
+        RandomDistillation(1.0, (16, 16, 2), num_envs=3, seed=0, device="cpu").load_state_dict(rnd.state_dict())
