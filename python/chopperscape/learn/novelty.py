@@ -117,7 +117,9 @@ class RandomDistillation:
         return ((latest - mean) / std).clamp(-5.0, 5.0).unsqueeze(1)
 
     def _error(self, x: torch.Tensor) -> torch.Tensor:
-        return ((self.predictor(self._input(x)) - self.target(self._input(x))) ** 2).mean(-1)
+        """Each frame's error: the predictor's output against the target's, squared, averaged over the outputs."""
+        seen = self._input(x)
+        return ((self.predictor(seen) - self.target(seen)) ** 2).mean(-1)
 
     def bonus(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The weighted bonus of each env's step that led to `raw` (the observations the step returned), 0 on reset
