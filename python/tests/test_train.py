@@ -241,6 +241,10 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
             (s, f"p43-steps12m-seed{s}", {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000})
             for s in (102, 103)
         ),
+        # Probes on the stalled seed 102 (`probe43.sh NAME UNTIL RUNS 102 -- FLAGS`, one thread): entropy 0.02 (the
+        # thirteenth and fifteenth sessions) and the exploration bonus `--rnd-coef 0.5` (the fifteenth).
+        (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
+        (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
             (s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2, "vf_coef": 0.5})
