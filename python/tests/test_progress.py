@@ -82,20 +82,29 @@ def test_the_schema_is_the_documented_contract():
     assert progress.ENDINGS == ("ended", "bird", "fuel", "limit")
     assert progress.GUIDANCE == ("aux_loss", "teacher_kl")
     assert progress.SELF_SUPERVISED == ("recon_loss",)
+    assert progress.NOVELTY == ("rnd_loss", "novelty")
     assert progress.COLUMNS == (
-        progress.RETURNS + progress.DIAGNOSTICS + progress.ENDINGS + progress.GUIDANCE + progress.SELF_SUPERVISED
+        progress.RETURNS
+        + progress.DIAGNOSTICS
+        + progress.ENDINGS
+        + progress.GUIDANCE
+        + progress.SELF_SUPERVISED
+        + progress.NOVELTY
     )
+    assert progress.OLDER_HEADERS == (progress.OLDER_COLUMNS, progress.OLDER_COLUMNS + progress.SELF_SUPERVISED)
 
 
-def test_a_csv_written_before_the_last_column_group_resumes_with_it_blank(tmp_path):
-    """Run folders of earlier versions (no `recon_loss` column) resume: their rows are kept, the new column blank;
-    any other header is still refused."""
+@pytest.mark.parametrize("version", range(2))
+def test_a_csv_written_before_the_last_column_group_resumes_with_it_blank(tmp_path, version):
+    """Run folders of earlier versions (no `recon_loss` column; no `rnd_loss` and `novelty`) resume: their rows are
+    kept, the new columns blank; any other header is still refused."""
+    header = progress.OLDER_HEADERS[version]
     older = tmp_path / "older.csv"
-    row = ["8", "1.0", "2", "10.0", "1.0", "5.0"] + [""] * (len(progress.OLDER_COLUMNS) - 6)
-    older.write_text(",".join(progress.OLDER_COLUMNS) + "\n" + ",".join(row) + "\n" + ",".join(["16", *row[1:]]) + "\n")
+    row = ["8", "1.0", "2", "10.0", "1.0", "5.0"] + [""] * (len(header) - 6)
+    older.write_text(",".join(header) + "\n" + ",".join(row) + "\n" + ",".join(["16", *row[1:]]) + "\n")
     progress.Writer.resume(older, 8).close()
     lines = older.read_text().splitlines()
-    assert lines == [",".join(progress.COLUMNS), ",".join(row + [""])]
+    assert lines == [",".join(progress.COLUMNS), ",".join(row + [""] * (len(progress.COLUMNS) - len(header)))]
     other = tmp_path / "other.csv"
     other.write_text(",".join(progress.OLDER_COLUMNS[:-1]) + "\n")
     with pytest.raises(ValueError, match="its header differs"):
