@@ -26,14 +26,8 @@ import math
 from typing import Any, cast
 
 import numpy as np
-
-try:
-    import torch
-    from torch import nn
-except ImportError as err:  # pragma: no cover - exercised only without torch
-    raise ImportError(
-        "chopperscape.learn needs PyTorch: pip install 'chopperscape[train]' (the CPU build of torch is enough)"
-    ) from err
+import torch
+from torch import nn
 
 from .normalize import RunningMeanStd
 from .recipe import Recipe
