@@ -239,7 +239,7 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
         # The fourteenth session's longer schedule, by the target's protocol (`target43.sh 102 RUNS -- --steps ...`).
         *(
             (s, f"p43-steps12m-seed{s}", {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000})
-            for s in (102, 103)
+            for s in (2, 102, 103)
         ),
         # Probes on the stalled seed 102 (`probe43.sh NAME UNTIL RUNS 102 -- FLAGS`, one thread): entropy 0.02 (the
         # thirteenth and fifteenth sessions) and the exploration bonus `--rnd-coef 0.5` (the fifteenth).
