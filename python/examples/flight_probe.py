@@ -33,7 +33,8 @@ sys.path = [p for p in sys.path if os.path.abspath(p or ".") != HERE]
 import numpy as np  # noqa: E402
 
 #: Feature indices (crates/core/src/features.rs): the chopper's x and y (0..1), the fuel, the nearest tank's slot.
-CHOPPER_X, CHOPPER_Y, FUEL, TANK_PRESENT, TANK_REACHABLE = 0, 1, 2, 20, 23
+#: An empty slot is all zeros, so `reachable` alone says a tank is there and in reach.
+CHOPPER_X, CHOPPER_Y, FUEL, TANK_REACHABLE = 0, 1, 2, 23
 
 
 def _collect():  # the trunk probe's twin-env player, loaded from its file beside this one
@@ -47,7 +48,7 @@ def _collect():  # the trunk probe's twin-env player, loaded from its file besid
 def flight(features: np.ndarray, ended: np.ndarray, num_envs: int) -> dict[str, Any]:
     """The summary of `features` and `ended` (rows in step order, `num_envs` a step, env by env)."""
     x, y = features[:, CHOPPER_X], features[:, CHOPPER_Y]
-    reachable = (features[:, TANK_PRESENT] > 0.5) & (features[:, TANK_REACHABLE] > 0.5)
+    reachable = features[:, TANK_REACHABLE] > 0.5
     steps = len(features) // num_envs
     fuel = features[: steps * num_envs, FUEL].reshape(steps, num_envs)
     went_on = ~ended[: (steps - 1) * num_envs].reshape(steps - 1, num_envs)  # the next row is the same episode's

@@ -99,7 +99,7 @@ class RandomDistillation:
         self.frames = RunningMeanStd((h, w))  # each pixel's running mean and variance
         self.errors = RunningMeanStd(())  # of the bonus's discounted running sum
         self.running = np.zeros(num_envs)
-        self.last: list[float] = []  # the raw errors since the last update, for the progress columns
+        self.since = [0.0, 0]  # the raw errors' sum and count since the last update, for the progress columns
         self.reported = 0.0
 
     def _input(self, x: torch.Tensor) -> torch.Tensor:
@@ -118,15 +118,16 @@ class RandomDistillation:
     def bonus(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The weighted bonus of each env's step that led to `raw` (the observations the step returned), 0 on reset
         steps; the frame statistics and the bonus's scale are updated with the valid ones."""
-        latest = raw if raw.ndim == 3 else raw[..., -1]
-        if valid.any():
+        any_valid = bool(valid.any())
+        if any_valid:
+            latest = raw if raw.ndim == 3 else raw[..., -1]
             self.frames.update(latest[valid].astype(np.float64))
         with torch.inference_mode():
             error = self._error(torch.from_numpy(raw).to(self.device)).double().cpu().numpy()
         self.running = np.where(valid, self.running * GAMMA_INTRINSIC + error, self.running)
-        if valid.any():
+        if any_valid:
             self.errors.update(self.running[valid])
-            self.last.extend(error[valid].tolist())
+            self.since = [self.since[0] + float(error[valid].sum()), self.since[1] + int(valid.sum())]
         scaled = error / math.sqrt(float(self.errors.var) + 1e-8)
         return np.where(valid, self.coef * scaled, 0.0).astype(np.float32)
 
@@ -134,8 +135,8 @@ class RandomDistillation:
         """The predictor's loss on a minibatch (the target fixed), unweighted: it trains only the predictor, whose
         parameters nothing else reads. The columns add `novelty`, the mean raw error of the valid steps of the
         rollout this update learns from."""
-        if self.last:  # the update's first minibatch: the rollout's steps are all in
-            self.reported, self.last = float(np.mean(self.last)), []
+        if self.since[1]:  # the update's first minibatch: the rollout's steps are all in
+            self.reported, self.since = self.since[0] / self.since[1], [0.0, 0]
         err = self._error(x).mean()
         return err, {"rnd_loss": err.item(), "novelty": self.reported}
 
@@ -158,9 +159,8 @@ class RandomDistillation:
             )
         self.target.load_state_dict(s["target"])
         self.predictor.load_state_dict(s["predictor"])
-        frames = RunningMeanStd.from_state(s["frames"])
-        frames.mean, frames.var = frames.mean.reshape(self.frames.mean.shape), frames.var.reshape(self.frames.var.shape)
-        self.frames, self.errors, self.running = frames, RunningMeanStd.from_state(s["errors"]), running
+        self.frames, self.errors = RunningMeanStd.from_state(s["frames"]), RunningMeanStd.from_state(s["errors"])
+        self.running = running
 
 
 def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any) -> Any:
