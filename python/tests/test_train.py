@@ -245,6 +245,13 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
         # thirteenth and fifteenth sessions) and the exploration bonus `--rnd-coef 0.5` (the fifteenth).
         (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
+        # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
+        # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores).
+        (
+            102,
+            "p43-ent02-12m-seed102",
+            {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02},
+        ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
             (s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2, "vf_coef": 0.5})
