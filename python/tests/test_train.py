@@ -186,6 +186,11 @@ EARLIER_PIXELS = {
 TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 
 
+#: The candidate recipe's seeds run so far (docs/curves/pixels-candidates/ent02-12m/target.csv), and its flags.
+CANDIDATE_SEEDS = (102,)
+CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02}
+
+
 @functools.cache
 def _collect_target() -> Any:
     """docs/curves/pixels-probes/collect_target.py (a standard-library script), loaded once from its file."""
@@ -206,16 +211,20 @@ def _target_set(seed: int) -> str:
     return str(_collect_target().set_of(seed))
 
 
-def test_the_targets_collected_seeds_are_the_ones_checked_here():
-    """Every seed with a line in the target's table has its curve, recipe and evaluation, and its recipe is checked
-    against the preset below (TARGET_SEEDS), so a seed collected later cannot escape that check."""
+@pytest.mark.parametrize(
+    "folder, seeds", [("pixels-seeds", TARGET_SEEDS), ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS)]
+)
+def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
+    """Every seed with a line in a collection's table (the preset's, a candidate's) has its curve, recipe and
+    evaluation, and its recipe is checked against the preset below (TARGET_SEEDS, CANDIDATE_SEEDS), so a seed
+    collected later cannot escape that check."""
     import csv
     import pathlib
 
-    seeds_dir = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / "pixels-seeds"
+    seeds_dir = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves" / folder
     with open(seeds_dir / "target.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert tuple(sorted(int(r["seed"]) for r in rows)) == TARGET_SEEDS
+    assert tuple(sorted(int(r["seed"]) for r in rows)) == tuple(sorted(seeds))
     for r in rows:
         folder = seeds_dir / _target_set(int(r["seed"]))
         for ext in ("csv", "recipe.json", "eval.json"):
@@ -223,6 +232,52 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
         evaluation = json.loads((folder / f"seed-{r['seed']}.eval.json").read_text())
         assert (evaluation["episodes"], evaluation["seed"], evaluation["greedy"]) == (100, 1_000_000, True)
         assert f"{evaluation['mean_return']:.1f}" == r["mean_return"]
+        summary = json.loads((folder / "summary.json").read_text())
+        assert summary["steps"] == json.loads((folder / f"seed-{r['seed']}.recipe.json").read_text())["total_steps"]
+
+
+@needs_torch
+def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path, monkeypatch):
+    """`collect_target.py RUNS --out FOLDER` gathers a candidate's seeds into FOLDER, not the preset's
+    pixels-seeds/: each seed's files, its table line, and a summary that states the seeds' own schedule (12 M
+    here, the preset's is 8 M), with the preset's baselines copied rather than played again; seeds of two
+    schedules in one set are refused by name, and pixels-seeds/ is left as it was."""
+    import pathlib
+    import shutil
+    import sys
+
+    curves = pathlib.Path(__file__).resolve().parents[2] / "docs" / "curves"
+    kept = curves / "pixels-candidates" / "ent02-12m"
+    runs = tmp_path / "runs"
+    for seed, source in ((102, kept / "100-104" / "seed-102"), (101, curves / "pixels-seeds" / "100-104" / "seed-101")):
+        run = runs / f"seed-{seed}"
+        run.mkdir(parents=True)
+        decisions = progress_rows(source.with_suffix(".csv"))[-1]["env_steps"]
+        shutil.copyfile(source.with_suffix(".csv"), run / "progress.csv")
+        shutil.copyfile(source.with_suffix(".recipe.json"), run / "recipe.json")
+        shutil.copyfile(source.with_suffix(".eval.json"), run / f"eval-{decisions}.json")
+    header, line102 = (kept / "target.csv").read_text().splitlines()[:2]
+    (runs / "target.csv").write_text(f"{header}\n{','.join(line102.split(',')[:-1])}\n")
+    before = (curves / "pixels-seeds" / "target.csv").read_text()
+    out = tmp_path / "candidate"
+    monkeypatch.setattr(sys, "argv", ["collect_target.py", str(runs), "--out", str(out), "--machine", "test"])
+    assert _collect_target().main() == 0
+    summary = json.loads((out / "100-104" / "summary.json").read_text())
+    assert summary["steps"] == 12_000_000
+    assert summary["seeds"] == [102]
+    for name in ("random", "heuristic"):
+        assert (out / "100-104" / f"baseline-{name}.json").read_bytes() == (
+            curves / "pixels-seeds" / "100-104" / f"baseline-{name}.json"
+        ).read_bytes()
+    assert (out / "target.csv").read_text().splitlines()[1].endswith(",test")
+    # Seed 101 of the preset (8 M) joins the same set: its summary would mix two schedules.
+    line101 = (curves / "pixels-seeds" / "target.csv").read_text().splitlines()
+    row101 = next(r for r in line101 if r.startswith("101,"))
+    with open(runs / "target.csv", "a") as f:
+        f.write(",".join(row101.split(",")[:-1]) + "\n")
+    with pytest.raises(ValueError, match=r"different schedules \(\[8000000, 12000000\]\)"):
+        _collect_target().main()
+    assert (curves / "pixels-seeds" / "target.csv").read_text() == before
 
 
 @pytest.mark.parametrize(
@@ -246,11 +301,10 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here():
         (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
-        # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores).
-        (
-            102,
-            "p43-ent02-12m-seed102",
-            {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02},
+        # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores), collected apart.
+        *(
+            (s, f"../pixels-candidates/ent02-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02_12M)
+            for s in CANDIDATE_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(

@@ -7,7 +7,13 @@ summarised by the multi-seed runner (`python -m chopperscape.learn.seeds --summa
 the seeds' held-out means with its 95 % bootstrap interval, the baselines at the preset's frame skip), written into
 the set's folder as `summary.md`, `summary.json` and `curves.png`.
 
-    python docs/curves/pixels-probes/collect_target.py RUNS [--machine TEXT]
+    python docs/curves/pixels-probes/collect_target.py RUNS [--machine TEXT] [--out FOLDER] [--title TEXT]
+
+`--out` gathers a candidate recipe's seeds into a folder of their own (e.g. `docs/curves/pixels-candidates/NAME`,
+the same layout: `SET/seed-K.*`, `target.csv`, each set's summary), so that the preset's figures in
+`pixels-seeds/` stay the preset's until the candidate replaces it; its baselines are copied from `pixels-seeds/`
+where that set has them (the same held-out seeds and rules), not evaluated again. `--title` names the recipe in the
+summaries' plots.
 
 Nothing is copied from a seed whose evaluation is missing (a run cut before its end); a seed outside both sets is
 refused by name.
@@ -48,11 +54,14 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("runs", type=Path, help="target43.sh's folder: target.csv and seed-K/")
     p.add_argument("--machine", default=None, help="what the seeds ran on (default: this machine's CPU)")
+    p.add_argument("--out", type=Path, default=OUT, help=f"where the seeds go (default: {OUT.relative_to(ROOT)})")
+    p.add_argument("--title", default="PPO, frames alone", help="the recipe's name in the summaries' plots")
     a = p.parse_args()
     machine = a.machine or this_machine()
+    out: Path = a.out.resolve()
     with open(a.runs / "target.csv", newline="") as f:
         new = list(csv.DictReader(f))
-    table = OUT / "target.csv"
+    table = out / "target.csv"
     rows: dict[int, dict[str, str]] = {}
     if table.is_file():
         with open(table, newline="") as f:
@@ -60,12 +69,15 @@ def main() -> int:
     touched = set()
     for row in new:
         seed, decisions = int(row["seed"]), row["decisions"]
-        run, folder = a.runs / f"seed-{seed}", OUT / set_of(seed)
+        run, folder = a.runs / f"seed-{seed}", out / set_of(seed)
         evaluation = run / f"eval-{decisions}.json"
         if not evaluation.is_file():
             print(f"seed {seed}: {evaluation} missing; not collected", file=sys.stderr)
             continue
         folder.mkdir(parents=True, exist_ok=True)
+        for baseline in (OUT / folder.name).glob("baseline-*.json"):
+            if not (folder / baseline.name).exists():
+                shutil.copyfile(baseline, folder / baseline.name)
         shutil.copyfile(run / "progress.csv", folder / f"seed-{seed}.csv")
         shutil.copyfile(run / "recipe.json", folder / f"seed-{seed}.recipe.json")
         # The evaluation as `evaluate` wrote it, with the training's wall time (as the multi-seed runner adds it).
@@ -78,10 +90,14 @@ def main() -> int:
         w.writeheader()
         w.writerows(rows[s] for s in sorted(rows))
     for name in sorted(touched):
-        title = f"PPO, frames alone, seeds {name}"
-        cmd = [sys.executable, "-m", "chopperscape.learn.seeds", "--summarise", str(OUT / name), "--preset", "pixels"]
-        subprocess.run([*cmd, "--title", title], check=True)
-        for log in (OUT / name).glob("baseline-*.log"):
+        title = f"{a.title}, seeds {name}"
+        cmd = [sys.executable, "-m", "chopperscape.learn.seeds", "--summarise", str(out / name), "--preset", "pixels"]
+        # The summary states the seeds' schedule: their recipes' (a candidate's may differ from the preset's).
+        steps = {json.loads(r.read_text())["total_steps"] for r in (out / name).glob("seed-*.recipe.json")}
+        if len(steps) != 1:
+            raise ValueError(f"{out / name}: seeds of different schedules ({sorted(steps)}) cannot share a summary")
+        subprocess.run([*cmd, "--steps", str(steps.pop()), "--title", title], check=True)
+        for log in (out / name).glob("baseline-*.log"):
             if log.stat().st_size == 0:  # the baselines' evaluations said nothing
                 log.unlink()
     return 0
