@@ -58,7 +58,8 @@ def _stopped_then_resumed(recipe, out: Path, stop_after_s: float, monkeypatch) -
     train.train(recipe, out, resume=True)
 
 
-def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch):
+@pytest.mark.parametrize("ent_floor", [1.0, 0.25])
+def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch, ent_floor):
     import torch
 
     from chopperscape.learn import train
@@ -72,6 +73,7 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch):
         num_minibatches=2,
         env_options={"max_fuel": 150},
         total_steps=8 * 32 * 7,
+        ent_floor=ent_floor,
     )
     train.train(recipe, tmp_path / "whole")
     _stopped_then_resumed(recipe, tmp_path / "parts", 7, monkeypatch)

@@ -83,6 +83,47 @@ def test_the_learning_rate_stops_at_its_floor():
     assert rates(lr_floor=0.0)[3:] == [0.0, 0.0]
 
 
+def test_the_entropy_weight_falls_to_its_floor_over_the_schedule():
+    from chopperscape.learn import ppo
+    from chopperscape.learn.recipe import Recipe, check_recipe
+
+    def weights(**kw):
+        r = Recipe(ent_coef=0.02, total_steps=1000, **kw)
+        return [ppo.entropy_coef(r, t) for t in (0, 500, 1000, 2000)]
+
+    # The default floor (1) keeps the weight exactly as it was, so recipes without it train bit for bit as before.
+    assert weights() == [0.02] * 4
+    assert weights(ent_floor=0.25) == pytest.approx([0.02, 0.0125, 0.005, 0.005])
+    assert weights(ent_floor=0.0) == pytest.approx([0.02, 0.01, 0.0, 0.0])
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match=r"ent_floor"):
+            check_recipe(Recipe(ent_floor=bad))
+
+
+@needs_torch
+def test_the_entropy_floor_changes_the_updates_after_the_first(tmp_path):
+    """The loop takes the entropy weight from the schedule: the first update (at 0 env steps) is the constant
+    weight's, the later ones are not; the recipe file keeps the floor."""
+    import torch
+
+    from chopperscape.learn import train
+    from chopperscape.learn.recipe import Recipe
+
+    def run(name, **kw):
+        recipe = Recipe(num_envs=8, num_steps=64, env_options={"max_fuel": 150}, hidden=16, total_steps=3072, **kw)
+        train.train(recipe, tmp_path / name)
+        return [{k: v for k, v in r.items() if k != "wall_s"} for r in progress_rows(tmp_path / name / "progress.csv")]
+
+    constant, falling = run("constant"), run("falling", ent_floor=0.0)
+    assert constant[0] == falling[0]
+    # Later updates learn with a smaller weight, and the runs part (near the uniform policy, where the entropy's
+    # gradient is small, in the weights before the printed columns).
+    a = torch.load(tmp_path / "constant" / "model.pt", weights_only=True)["actor"]
+    b = torch.load(tmp_path / "falling" / "model.pt", weights_only=True)["actor"]
+    assert not all(torch.equal(a[k], b[k]) for k in a)
+    assert json.loads((tmp_path / "falling" / "recipe.json").read_text())["ent_floor"] == 0.0
+
+
 @needs_torch
 def test_progress_diagnostics_are_sane(tmp_path):
     from chopperscape.learn import train

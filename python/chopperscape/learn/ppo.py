@@ -1,5 +1,5 @@
-"""PPO's small pieces that the loop calls by name: the learning-rate schedule over env steps, and the update's
-statistics, kept by name and averaged over its minibatches."""
+"""PPO's small pieces that the loop calls by name: the learning rate's and the entropy weight's schedules over env
+steps, and the update's statistics, kept by name and averaged over its minibatches."""
 
 from __future__ import annotations
 
@@ -13,6 +13,13 @@ def learning_rate(recipe: Recipe, env_steps: int) -> float:
     if recipe.anneal_lr:
         lr *= max(1.0 - env_steps / recipe.total_steps, recipe.lr_floor)
     return lr
+
+
+def entropy_coef(recipe: Recipe, env_steps: int) -> float:
+    """The entropy weight at `env_steps`: `ent_coef` falling linearly over `total_steps` to `ent_floor` of itself
+    (constant at the default floor of 1). It follows env steps only, as the learning rate does."""
+    done = min(env_steps / recipe.total_steps, 1.0)
+    return recipe.ent_coef * (1.0 - (1.0 - recipe.ent_floor) * done)
 
 
 class UpdateStats:

@@ -29,6 +29,7 @@ RECIPE_FLAGS = (
     "num_minibatches",
     "clip_coef",
     "ent_coef",
+    "ent_floor",
     "vf_coef",
     "max_grad_norm",
     "hidden",
@@ -169,6 +170,10 @@ class Recipe:
     num_minibatches: int = 8
     clip_coef: float = 0.2
     ent_coef: float = 0.02
+    #: Where the entropy weight ends, as a fraction of `ent_coef`: it falls linearly over the step budget T, the
+    #: weight at t being ent_coef × (1 − (1 − ent_floor) · min(t / T, 1)). 1 (the default) keeps it constant: a wide
+    #: search early (issue 43's stalled seed) without a noisy policy late (the strong seeds' dodging).
+    ent_floor: float = 1.0
     vf_coef: float = 0.5
     max_grad_norm: float = 0.5
     hidden: int = 128
@@ -226,7 +231,13 @@ class Recipe:
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
 #: (:func:`chopperscape.learn.rundir.recipe_hash`) leaves them out at that value, so those folders still resume.
-LATER_SETTINGS: dict[str, Any] = {"torch_compile": False, "recon_coef": 0.0, "lr_floor": LR_FLOOR, "rnd_coef": 0.0}
+LATER_SETTINGS: dict[str, Any] = {
+    "torch_compile": False,
+    "recon_coef": 0.0,
+    "lr_floor": LR_FLOOR,
+    "rnd_coef": 0.0,
+    "ent_floor": 1.0,
+}
 
 #: `--option` names the recipe sets itself, and what to use instead.
 RESERVED_OPTIONS = {
@@ -304,6 +315,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("gae_lambda", r.gae_lambda, 0.0, 1.0)
     number_in("learning_rate", r.learning_rate, 0.0, 1.0, low_open=True)
     number_in("lr_floor", r.lr_floor, 0.0, 1.0)
+    number_in("ent_floor", r.ent_floor, 0.0, 1.0)
     number_in("clip_coef", r.clip_coef, 0.0, 10.0, low_open=True)
     number_in("ent_coef", r.ent_coef, 0.0, 1000.0)
     number_in("vf_coef", r.vf_coef, 0.0, 1000.0)

@@ -41,7 +41,7 @@ from pathlib import Path
 from .._cli import print_line, run_command
 from . import flags, progress
 from .phases import OFF, Phases
-from .ppo import UpdateStats, learning_rate
+from .ppo import UpdateStats, entropy_coef, learning_rate
 from .recipe import Recipe, check_minutes, check_recipe, check_until
 from .rollout import Rollout, advantages
 from .run import Run, RunWriteError
@@ -105,6 +105,7 @@ def train(
         end = r.total_steps if until is None else min(until, r.total_steps)
         while s.env_steps < end and not run.stopping(minutes):
             lr = optimizer.param_groups[0]["lr"] = learning_rate(r, s.env_steps)
+            ent_coef = entropy_coef(r, s.env_steps)
 
             # --- Rollout: NEXT_STEP autoreset; the step after an episode's end is a reset step (not valid) ---------
             s.episodes.new_update()
@@ -146,7 +147,7 @@ def train(
                     extra, guided = guide.loss(idx, logits, h, s.env_steps)
                     own, learned = p.frames_loss.loss(x, h)
                     predictor, novel = p.novelty.loss(x)
-                    loss = pg - r.ent_coef * ent + r.vf_coef * v_loss + extra + own + predictor
+                    loss = pg - ent_coef * ent + r.vf_coef * v_loss + extra + own + predictor
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {s.update}")
                     optimizer.zero_grad()
