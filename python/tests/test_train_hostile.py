@@ -46,6 +46,8 @@ def no_training(monkeypatch):
         (["--learning-rate", "nan"], "learning_rate"),
         (["--lr-floor", "1.5"], "lr_floor"),
         (["--lr-floor", "-0.1"], "lr_floor"),
+        (["--ent-floor", "1.5"], "ent_floor"),
+        (["--ent-floor", "nan"], "ent_floor"),
         (["--option", "obs_type=rgb"], "--obs-type"),
         (["--option", "num_threads=2"], "--env-threads"),
         (["--option", "lives=0"], "lives"),
