@@ -75,9 +75,6 @@ def main() -> int:
             print(f"seed {seed}: {evaluation} missing; not collected", file=sys.stderr)
             continue
         folder.mkdir(parents=True, exist_ok=True)
-        for baseline in (OUT / folder.name).glob("baseline-*.json"):
-            if not (folder / baseline.name).exists():
-                shutil.copyfile(baseline, folder / baseline.name)
         shutil.copyfile(run / "progress.csv", folder / f"seed-{seed}.csv")
         shutil.copyfile(run / "recipe.json", folder / f"seed-{seed}.recipe.json")
         # The evaluation as `evaluate` wrote it, with the training's wall time (as the multi-seed runner adds it).
@@ -90,6 +87,9 @@ def main() -> int:
         w.writeheader()
         w.writerows(rows[s] for s in sorted(rows))
     for name in sorted(touched):
+        for baseline in (OUT / name).glob("baseline-*.json"):  # the preset's, on the same seeds and rules
+            if not (out / name / baseline.name).exists():
+                shutil.copyfile(baseline, out / name / baseline.name)
         title = f"{a.title}, seeds {name}"
         cmd = [sys.executable, "-m", "chopperscape.learn.seeds", "--summarise", str(out / name), "--preset", "pixels"]
         # The summary states the seeds' schedule: their recipes' (a candidate's may differ from the preset's).

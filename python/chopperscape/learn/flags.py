@@ -19,10 +19,10 @@ from .recipe import (
     Recipe,
     check_minutes,
     check_recipe,
-    check_run_folder,
     check_until,
     read_recipe,
 )
+from .rundir import check_run_folder
 
 #: What ``--help`` says the command does.
 DESCRIPTION = "Trains the PPO recipe on ChopperScape-v0 (CleanRL-style sections, PyTorch)."

@@ -247,8 +247,6 @@ RESERVED_OPTIONS = {
     "autoreset_mode": "the recipe steps the batch in NEXT_STEP mode and masks the reset steps",
     "render_mode": "the recipe draws nothing",
 }
-#: The files of a run in its folder: the model, its curve, its recipe, and the state `--resume` continues from.
-RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
 #: The augmentations `Recipe.augment` names.
 AUGMENTS = ("none", "shift")
 #: The networks `Recipe.network` names.
@@ -407,20 +405,6 @@ def check_until(until: int | None) -> None:
     """`ValueError` unless `until` (the env-step stop) is None or a positive number of steps."""
     if until is not None:
         positive_int("until", until, maximum=MAX_TOTAL_STEPS)
-
-
-def check_run_folder(out: Path, force: bool = False) -> None:
-    """`ValueError` when `out` cannot hold a new run: it is not a folder, or it holds a run (`RUN_FILES`) and not
-    `force`. Nothing is written."""
-    out = Path(out)
-    if os.path.lexists(out) and not out.is_dir():
-        raise ValueError(f"--out {out} is not a folder: give a folder for progress.csv, model.pt and recipe.json")
-    there = [name for name in RUN_FILES if os.path.lexists(out / name)]
-    if there and not force:
-        raise ValueError(
-            f"--out {out} already holds a run ({', '.join(there)}): pass --force to start over in it (its files are "
-            "replaced), or give another folder"
-        )
 
 
 def read_recipe(path: Path) -> Recipe:

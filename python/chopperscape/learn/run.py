@@ -31,9 +31,9 @@ from . import progress
 from .modelfile import save
 from .normalize import RewardScaler
 from .parts import Parts, parts_of
-from .recipe import RUN_FILES, Recipe, check_run_folder
+from .recipe import Recipe
 from .rollout import Episodes
-from .rundir import RunLock, remove_stale_parts
+from .rundir import RUN_FILES, RunLock, check_run_folder, remove_stale_parts
 from .state import Clock, EnvBatch, TorchRng, TrainState, read_resume
 
 #: Updates between checkpoints (`model.pt` and `resume.pt`).

@@ -30,7 +30,8 @@ try:
 except ImportError:  # pragma: no cover - Windows
     fcntl = None  # type: ignore[assignment]
 
-from .recipe import RUN_FILES
+#: The files of a run in its folder: the model, its curve, its recipe, and the state `--resume` continues from.
+RUN_FILES = ("model.pt", "progress.csv", "recipe.json", "resume.pt")
 
 #: The key of a resume state that records its run's recipe hash.
 RECIPE_KEY = "recipe_sha256"
@@ -186,3 +187,17 @@ def remove_stale_parts(out: str | os.PathLike) -> list[Path]:
         except OSError:
             pass
     return removed
+
+
+def check_run_folder(out: Path, force: bool = False) -> None:
+    """`ValueError` when `out` cannot hold a new run: it is not a folder, or it holds a run (`RUN_FILES`) and not
+    `force`. Nothing is written."""
+    out = Path(out)
+    if os.path.lexists(out) and not out.is_dir():
+        raise ValueError(f"--out {out} is not a folder: give a folder for progress.csv, model.pt and recipe.json")
+    there = [name for name in RUN_FILES if os.path.lexists(out / name)]
+    if there and not force:
+        raise ValueError(
+            f"--out {out} already holds a run ({', '.join(there)}): pass --force to start over in it (its files are "
+            "replaced), or give another folder"
+        )
