@@ -1,7 +1,9 @@
 """`--rnd-coef`: the exploration bonus from the frames alone (`chopperscape.learn.novelty`, Random Network
 Distillation). The bonus is the predictor's error on the latest frame, larger on frames it has not learned, 0 on
 reset steps; the predictor trains, the run resumes (tests/test_resume.py) and saves the same kind of policy; the
-networks leave torch's random stream as it is; the setting is refused where it means nothing."""
+networks leave torch's random stream as it is; the setting is refused where it means nothing. `--rnd-own-value`:
+the bonus as a reward of its own, its advantage (with its own value head) not cut at episode ends and joined to the
+game's."""
 
 from __future__ import annotations
 
@@ -38,19 +40,19 @@ def test_the_bonus_is_larger_on_frames_the_predictor_has_not_learned_and_0_on_re
     seen, unseen = _frames(8, 2), _frames(8, 11)
     valid = np.ones(8, bool)
     for _ in range(4):  # the statistics see both kinds of frame; the predictor learns only the first
-        rnd.bonus(seen, valid), rnd.bonus(unseen, valid)
+        rnd.bonus(0, seen, valid), rnd.bonus(0, unseen, valid)
     for _ in range(200):
-        loss, row = rnd.loss(torch.from_numpy(seen))
+        loss, row = rnd.loss(torch.from_numpy(seen), None, torch.arange(8))
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
     assert set(row) == {"rnd_loss", "novelty"} and row["rnd_loss"] < 0.01
-    known, new = rnd.bonus(seen, valid), rnd.bonus(unseen, valid)
+    known, new = rnd.bonus(1, seen, valid), rnd.bonus(2, unseen, valid)
     assert known.dtype == np.float32 and known.shape == (8,)
     assert (new > 10 * known).all() and (known > 0).all()
     valid[[1, 5]] = False  # reset steps: no bonus, and the running sums stay
     before = rnd.running.copy()
-    out = rnd.bonus(unseen, valid)
+    out = rnd.bonus(3, unseen, valid)
     assert out[1] == 0 and out[5] == 0 and (out[valid] > 0).all()
     assert rnd.running[1] == before[1] and rnd.running[0] != before[0]
 
@@ -64,10 +66,10 @@ def test_the_bonus_reads_only_the_latest_frame_and_its_weight_scales_it():
     y = x.copy()
     y[..., 0] = 0  # another older frame: the same bonus
     valid = np.ones(4, bool)
-    out_a, out_b = a.bonus(x, valid), b.bonus(y, valid)
+    out_a, out_b = a.bonus(0, x, valid), b.bonus(0, y, valid)
     assert np.allclose(2 * out_a, out_b)
     single = RandomDistillation(1.0, (16, 16), num_envs=4, seed=3, device="cpu")  # no stack axis
-    assert np.allclose(single.bonus(x[..., -1], valid), out_a)
+    assert np.allclose(single.bonus(0, x[..., -1], valid), out_a)
 
 
 def test_making_the_networks_leaves_torchs_random_stream_as_it_is():
@@ -128,3 +130,99 @@ def test_it_is_refused_where_it_means_nothing_before_anything_is_written(tmp_pat
         rnd.load_state_dict(None)
     with pytest.raises(ValueError, match="sums of"):
         RandomDistillation(1.0, (16, 16, 2), num_envs=3, seed=0, device="cpu").load_state_dict(rnd.state_dict())
+
+
+def _own(**settings):
+    """A recipe with the bonus's own value, its agent, and the part."""
+    from chopperscape.learn.networks import build_agent
+    from chopperscape.learn.novelty import novelty_of
+
+    recipe = _recipe(rnd_coef=0.5, rnd_own_value=True, **settings)
+    agent = build_agent("small", (16, 16, 2), invert_frames=True)
+    return recipe, agent, novelty_of(recipe, (16, 16, 2), "cpu", agent, agent.embedding_width)
+
+
+def test_its_own_value_keeps_the_bonus_apart_from_the_games_reward():
+    from chopperscape.learn.novelty import OwnValueDistillation, RandomDistillation
+
+    recipe, _, own = _own()
+    assert isinstance(own, OwnValueDistillation)
+    valid = np.array([True, False, True, True])
+    out = own.bonus(5, _frames(4, 3), valid)
+    assert out.dtype == np.float32 and out.shape == (4,) and not out.any()  # nothing added to the game's reward
+    assert own.rewards[5, 1] == 0 and (own.rewards[5, valid] > 0).all() and not own.rewards[4].any()
+    one_head = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=recipe.seed, device="cpu")
+    assert np.allclose(one_head.bonus(5, _frames(4, 3), valid), 0.5 * own.rewards[5].numpy())
+
+
+def test_its_own_advantage_runs_across_episode_ends_and_joins_the_games():
+    """By hand: the bonus's value 1 everywhere, rewards 1..7; env 0's episode ends at row 1 (row 2 is its reset
+    step), and its advantage there still reads row 3's, the next episode's first step."""
+    import torch
+
+    from chopperscape.learn.rollout import Rollout, advantages
+
+    _, agent, own = _own(num_envs=2, num_steps=4, gae_lambda=0.5)
+    buf = Rollout(4, 2, (16, 16, 2), torch.uint8, "cpu")
+    valid = np.array([[1, 1], [1, 1], [0, 1], [1, 1]], bool)
+    for t in range(4):
+        zeros = torch.zeros(2)
+        buf.store(t, torch.from_numpy(_frames(2, 3 * t)), zeros.long(), zeros, zeros, valid[t])
+        buf.outcome(t, np.ones(2, np.float32), np.array([t == 1, False]))
+    rewards = torch.tensor([[1.0, 2.0], [3.0, 4.0], [0.0, 5.0], [6.0, 7.0]])
+    with torch.no_grad():
+        own.value_head.weight.zero_()
+        own.value_head.bias.fill_(1.0)
+    own.rewards.copy_(rewards)
+    next_obs = torch.from_numpy(_frames(2, 12))
+    game = advantages(buf, agent, next_obs, 0.998, 0.5)
+    joined = own.advantages(game, buf, next_obs)
+    g, gl = 0.99, 0.99 * 0.5
+    d = (rewards + g - 1).tolist()  # each step's error, bootstrapped from a value of 1 (next_obs's too)
+    env0 = [d[3][0]]
+    for t in (1, 0):  # row 2 is skipped, not cut
+        env0.insert(0, d[t][0] + gl * env0[0])
+    env1 = [d[3][1]]
+    for t in (2, 1, 0):
+        env1.insert(0, d[t][1] + gl * env1[0])
+    expected = torch.tensor([env0[0], env1[0], env0[1], env1[1], env1[2], env0[2], env1[3]])  # rows, then envs
+    assert torch.allclose(joined.advantages - game.advantages, 0.5 * expected)
+    assert torch.allclose(own.returns, expected + 1)
+    assert torch.equal(joined.returns, game.returns) and torch.equal(joined.obs, game.obs)
+
+
+def test_a_run_with_its_own_value_trains_and_resumes_only_its_own_kind(tmp_path):
+    import csv
+
+    import torch
+
+    from chopperscape.learn import train
+    from chopperscape.learn.novelty import RandomDistillation
+
+    one = train.train(_recipe(rnd_coef=0.5), tmp_path / "one")
+    own = train.train(_recipe(rnd_coef=0.5, rnd_own_value=True), tmp_path / "own")
+    with open(tmp_path / "own" / "progress.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 6 and all(0 < float(r["rnd_loss"]) < 1e3 and float(r["value_loss"]) < 1e3 for r in rows)
+    a, b = torch.load(one, weights_only=True), torch.load(own, weights_only=True)
+    assert set(a) == set(b) and set(a["actor"]) == set(b["actor"])  # no value head of the bonus's in the policy
+    assert not all(torch.equal(a["actor"][k], b["actor"][k]) for k in a["actor"])
+    state = torch.load(tmp_path / "own" / "resume.pt", weights_only=True)["state"]["novelty"]
+    head = state["value_head"]
+    assert head["weight"].shape == (1, 256) and head["bias"].abs().item() > 0  # it learned
+    _, _, part = _own()
+    part.load_state_dict(state)
+    assert torch.equal(part.value_head.weight, head["weight"])
+    one_head = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=0, device="cpu")
+    with pytest.raises(ValueError, match="has a value head of its own"):
+        one_head.load_state_dict(state)
+    with pytest.raises(ValueError, match="has no value head of its own"):
+        part.load_state_dict(one_head.state_dict())
+
+
+def test_its_own_value_is_refused_without_the_bonus(tmp_path):
+    from chopperscape.learn import train
+
+    with pytest.raises(ValueError, match=r"`rnd_own_value`: it is the novelty bonus's; allowed with rnd_coef > 0"):
+        train.train(_recipe(rnd_own_value=True), tmp_path / "a")
+    assert not (tmp_path / "a").exists()

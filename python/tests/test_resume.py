@@ -86,9 +86,16 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch, 
 
 
 @pytest.mark.parametrize(
-    ("aux_coef", "recon_coef", "rnd_coef"), [(0.0, 0.0, 0.0), (0.5, 0.0, 0.0), (0.0, 2.0, 0.0), (0.0, 0.0, 0.5)]
+    ("aux_coef", "recon_coef", "rnd_coef", "own"),
+    [
+        (0.0, 0.0, 0.0, False),
+        (0.5, 0.0, 0.0, False),
+        (0.0, 2.0, 0.0, False),
+        (0.0, 0.0, 0.5, False),
+        (0.0, 0.0, 0.5, True),
+    ],
 )
-def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef):
+def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef, own):
     from chopperscape.learn import train
     from chopperscape.learn.recipe import Recipe
 
@@ -102,6 +109,7 @@ def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux
         aux_coef=aux_coef,
         recon_coef=recon_coef,
         rnd_coef=rnd_coef,
+        rnd_own_value=own,
         augment="shift",
         total_steps=4 * 16 * 5,
     )

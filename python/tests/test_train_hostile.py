@@ -48,6 +48,7 @@ def no_training(monkeypatch):
         (["--lr-floor", "-0.1"], "lr_floor"),
         (["--ent-floor", "1.5"], "ent_floor"),
         (["--ent-floor", "nan"], "ent_floor"),
+        (["--rnd-own-value"], "rnd_own_value`: it is the novelty bonus"),
         (["--option", "obs_type=rgb"], "--obs-type"),
         (["--option", "num_threads=2"], "--env-threads"),
         (["--option", "lives=0"], "lives"),

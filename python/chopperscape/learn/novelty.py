@@ -13,11 +13,16 @@ pulls it toward the frames it has not seen, the ones at the other end of the sky
 As CleanRL's `ppo_rnd_envpool.py` does, save what the 2-core pixel loop asks: the latest frame of each stack, each
 pixel standardised by running statistics and clipped to ±5; the error (mean squared over the 128 outputs) divided by
 the running standard deviation of its discounted sum (γ 0.99, not cut at episode ends); the predictor trained on
-every minibatch. Unlike the paper, one value head: the bonus, times `rnd_coef`, is added to the step's scaled
-reward and cut at episode ends (the paper's second, non-episodic head is a later option if this one shows promise).
-Training only: neither network is part of the policy, the saved model or its export.
+every minibatch. By default one value head: the bonus, times `rnd_coef`, is added to the step's scaled reward and
+cut at episode ends, so it also pays for surviving, wherever the chopper is. With `rnd_own_value`
+(:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a value head of its own
+on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the policy learns from the
+advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training only: neither network nor
+the bonus's value head is part of the policy, the saved model or its export.
 
-:func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0.
+:func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
+calls `bonus(t, raw, valid)` at each rollout step, `advantages(batch, buf, next_obs)` after GAE and `loss(x, h, idx)`
+on each minibatch.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from torch import nn
 
 from .normalize import RunningMeanStd
 from .recipe import Recipe
+from .rollout import Batch, Rollout
 
 #: The discount of the bonus's running sum, the one its scale is taken from (the paper's γ_I).
 GAMMA_INTRINSIC = 0.99
@@ -45,10 +51,13 @@ class NoNovelty:
     def params(self) -> list[nn.Parameter]:
         return []
 
-    def bonus(self, raw: np.ndarray, valid: np.ndarray) -> float:
+    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> float:
         return 0.0
 
-    def loss(self, x: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
+    def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
+        return batch
+
+    def loss(self, x: torch.Tensor, h: torch.Tensor | None, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
         return torch.zeros(()), {}
 
     def state_dict(self) -> None:
@@ -115,9 +124,9 @@ class RandomDistillation:
         seen = self._input(x)
         return ((self.predictor(seen) - self.target(seen)) ** 2).mean(-1)
 
-    def bonus(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """The weighted bonus of each env's step that led to `raw` (the observations the step returned), 0 on reset
-        steps; the frame statistics and the bonus's scale are updated with the valid ones."""
+    def scaled(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The unweighted bonus (float64) of each env's step that led to `raw` (the observations the step returned),
+        0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
         any_valid = bool(valid.any())
         if any_valid:
             latest = raw if raw.ndim == 3 else raw[..., -1]
@@ -128,13 +137,20 @@ class RandomDistillation:
         if any_valid:
             self.errors.update(self.running[valid])
             self.since = [self.since[0] + float(error[valid].sum()), self.since[1] + int(valid.sum())]
-        scaled = error / math.sqrt(float(self.errors.var) + 1e-8)
-        return np.where(valid, self.coef * scaled, 0.0).astype(np.float32)
+        return np.where(valid, error / math.sqrt(float(self.errors.var) + 1e-8), 0.0)
 
-    def loss(self, x: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
-        """The predictor's loss on a minibatch (the target fixed), unweighted: it trains only the predictor, whose
-        parameters nothing else reads. The columns add `novelty`, the mean raw error of the valid steps of the
-        rollout this update learns from."""
+    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward."""
+        return (self.coef * self.scaled(raw, valid)).astype(np.float32)  # as in runs before `scaled` was split out
+
+    def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
+        """The batch as it is: the bonus is already in the rewards its advantages come from."""
+        return batch
+
+    def loss(self, x: torch.Tensor, h: torch.Tensor | None, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
+        """The predictor's loss on a minibatch `x` (the target fixed), unweighted: it trains only the predictor, whose
+        parameters nothing else reads (`h` and `idx`, the minibatch's embedding and rows, are the own value's). The
+        columns add `novelty`, the mean raw error of the valid steps of the rollout this update learns from."""
         if self.since[1]:  # the update's first minibatch: the rollout's steps are all in
             self.reported, self.since = self.since[0] / self.since[1], [0.0, 0]
         err = self._error(x).mean()
@@ -152,6 +168,11 @@ class RandomDistillation:
     def load_state_dict(self, s: Any) -> None:
         if not isinstance(s, dict):
             raise ValueError("it holds no novelty bonus's networks, and this recipe has one (rnd_coef > 0)")
+        if ("value_head" in s) != isinstance(self, OwnValueDistillation):
+            has = "has a" if "value_head" in s else "has no"
+            raise ValueError(
+                f"its novelty bonus {has} value head of its own, and this recipe's differs (rnd_own_value)"
+            )
         running = np.asarray(s["running"], dtype=np.float64)
         if running.shape != self.running.shape:
             raise ValueError(
@@ -163,9 +184,77 @@ class RandomDistillation:
         self.running = running
 
 
-def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any) -> Any:
+class OwnValueDistillation(RandomDistillation):
+    """The bonus as the paper has it: a reward of its own, learned by a value head of its own on the policy's trunk,
+    its return not cut at episode ends, joined to the game's advantage after GAE."""
+
+    def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, embedding_width: int, device: Any):
+        super().__init__(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)
+        with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
+            torch.manual_seed(recipe.seed + 0x52E)
+            self.value_head = nn.Linear(embedding_width, 1).to(device)
+            nn.init.orthogonal_(self.value_head.weight, 1.0)  # as the critic's
+            nn.init.zeros_(self.value_head.bias)
+        self.params = self.params + list(self.value_head.parameters())
+        self.agent, self.gae_lambda, self.vf_coef = agent, recipe.gae_lambda, recipe.vf_coef
+        self.rewards = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)
+        self.returns = torch.zeros(0, device=device)
+
+    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """Keeps rollout step `t`'s bonus as a reward of its own; the game's reward gets nothing added."""
+        self.rewards[t] = torch.from_numpy(self.scaled(raw, valid).astype(np.float32)).to(self.device)
+        return np.zeros(len(valid), np.float32)
+
+    @torch.no_grad()
+    def values(self, obs: torch.Tensor) -> torch.Tensor:
+        """The bonus's value of each observation (a batch of the network's inputs), in chunks of 1,024."""
+        out = [self.value_head(self.agent.heads(x)[2]).squeeze(-1) for x in obs.split(1024)]
+        return torch.cat(out)
+
+    @torch.no_grad()
+    def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
+        """The batch with ``rnd_coef`` times the bonus's advantage added to the game's: GAE over the rollout's valid
+        steps with γ 0.99 and the recipe's λ, bootstrapped from `next_obs`, not cut at episode ends (a reset step
+        carries nothing: the step that ended an episode bootstraps from the next episode's first). The bonus's
+        returns, the value head's targets, are kept for :meth:`loss`."""
+        t_len, n = self.rewards.shape
+        values = self.values(buf.obs.reshape(-1, *buf.obs_shape)).reshape(t_len, n)
+        next_value, last = self.values(next_obs), torch.zeros(n, device=self.device)
+        adv = torch.zeros((t_len, n), device=self.device)
+        for t in reversed(range(t_len)):
+            valid = buf.valid[t].bool()
+            step = self.rewards[t] + GAMMA_INTRINSIC * next_value - values[t]
+            step = step + GAMMA_INTRINSIC * self.gae_lambda * last
+            last = torch.where(valid, step, last)
+            next_value = torch.where(valid, values[t], next_value)
+            adv[t] = torch.where(valid, step, 0.0)
+        mask = batch.mask
+        own = adv.reshape(-1)[mask]
+        self.returns = own + values.reshape(-1)[mask]
+        return batch._replace(advantages=batch.advantages + self.coef * own)
+
+    def loss(self, x: torch.Tensor, h: torch.Tensor | None, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
+        """The predictor's loss (:meth:`RandomDistillation.loss`) plus the bonus's value loss on the minibatch's
+        embedding `h` (rows `idx` of the batch), weighted as the game's value loss is (`vf_coef`)."""
+        predictor, row = super().loss(x, h, idx)
+        value = self.value_head(cast(torch.Tensor, h)).squeeze(-1)
+        return predictor + self.vf_coef * 0.5 * ((value - self.returns[idx]) ** 2).mean(), row
+
+    def state_dict(self) -> dict[str, Any]:
+        head = {k: v.detach().cpu() for k, v in self.value_head.state_dict().items()}
+        return {**super().state_dict(), "value_head": head}
+
+    def load_state_dict(self, s: Any) -> None:
+        super().load_state_dict(s)
+        self.value_head.load_state_dict(s["value_head"])
+
+
+def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: Any = None, width: int = 0) -> Any:
     """The exploration part `recipe` asks for: :class:`RandomDistillation` when `rnd_coef` > 0 (a CNN recipe:
-    :func:`~.recipe.check_recipe` refuses it for features), else :class:`NoNovelty`."""
+    :func:`~.recipe.check_recipe` refuses it for features), :class:`OwnValueDistillation` with `rnd_own_value`
+    (its value head reads `agent`'s embedding, `width` numbers), else :class:`NoNovelty`."""
     if recipe.rnd_coef <= 0:
         return NoNovelty()
+    if recipe.rnd_own_value:
+        return OwnValueDistillation(recipe, obs_shape, agent, width, device)
     return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)

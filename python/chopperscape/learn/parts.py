@@ -83,8 +83,9 @@ class Parts(NamedTuple):
     net: Network
     #: A self-supervised loss from the frames alone (:mod:`.selfsup`): `loss(frames, embedding)` per minibatch.
     frames_loss: Any
-    #: An exploration bonus from the frames alone (:mod:`.novelty`): `bonus(raw, valid)` per env step, added to the
-    #: scaled reward, and `loss(frames)` per minibatch (its predictor's).
+    #: An exploration bonus from the frames alone (:mod:`.novelty`): `bonus(t, raw, valid)` per env step, added to
+    #: the scaled reward (or kept as a reward of its own), `advantages(batch, buf, next_obs)` after GAE (its own
+    #: advantage joined to the game's), and `loss(frames, embedding, rows)` per minibatch.
     novelty: Any
 
 
@@ -139,5 +140,5 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
         device,
         net,
         frames_loss(recipe, width, obs_shape, device),
-        novelty_of(recipe, obs_shape, device),
+        novelty_of(recipe, obs_shape, device, agent, width),
     )

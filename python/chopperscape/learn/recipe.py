@@ -46,6 +46,7 @@ RECIPE_FLAGS = (
     "torch_compile",
     "recon_coef",
     "rnd_coef",
+    "rnd_own_value",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -227,6 +228,9 @@ class Recipe:
     #: prediction error on each step's latest frame, scaled by its running spread and added to the step's reward
     #: (:mod:`chopperscape.learn.novelty`). Training only: the saved model has neither network. 0 (the default): none.
     rnd_coef: float = 0.0
+    #: With `rnd_coef`: the bonus as the paper has it, a reward with a value head of its own on the trunk, its return
+    #: not cut at episode ends, `rnd_coef` weighing its advantage. False (the default): added to the game's reward.
+    rnd_own_value: bool = False
 
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
@@ -237,6 +241,7 @@ LATER_SETTINGS: dict[str, Any] = {
     "lr_floor": LR_FLOOR,
     "rnd_coef": 0.0,
     "ent_floor": 1.0,
+    "rnd_own_value": False,
 }
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -326,7 +331,7 @@ def check_recipe(recipe: Recipe) -> None:
     if not isinstance(r.teacher, str):
         raise ValueError(f"invalid value {r.teacher!r} for option `teacher`: allowed a model file's path, or ''")
     policy_seed(r.seed)
-    for name in ("anneal_lr", "norm_obs", "norm_reward", "invert_frames", "torch_compile"):
+    for name in ("anneal_lr", "norm_obs", "norm_reward", "invert_frames", "torch_compile", "rnd_own_value"):
         check_bool(name, getattr(r, name))
     if not isinstance(r.obs_type, str):
         raise ValueError(f"invalid value {r.obs_type!r} for option `obs_type`: allowed a string")
@@ -350,6 +355,10 @@ def check_recipe(recipe: Recipe) -> None:
         raise ValueError(
             f"invalid value {r.rnd_coef!r} for option `rnd_coef`: the novelty bonus is for CNN recipes "
             "(pixel observations); allowed 0 here"
+        )
+    if r.rnd_own_value and r.rnd_coef <= 0:
+        raise ValueError(
+            "invalid value True for option `rnd_own_value`: it is the novelty bonus's; allowed with rnd_coef > 0"
         )
     if r.augment != "none" and mlp:
         raise ValueError(

@@ -121,12 +121,12 @@ def train(
                 s.env_steps += int(valid.sum())
                 s.episodes.record(reward, valid, term, trunc, info)
                 done = term | trunc
-                buf.outcome(t, s.rewards(reward, valid, done) + p.novelty.bonus(raw, valid), done)
+                buf.outcome(t, s.rewards(reward, valid, done) + p.novelty.bonus(t, raw, valid), done)
                 s.next_done = done
                 s.next_obs = encode(raw)
 
             # --- Advantages: GAE over the valid steps -----------------------------------------------------------
-            batch = gae(buf, agent, s.next_obs, r.gamma, r.gae_lambda)
+            batch = p.novelty.advantages(gae(buf, agent, s.next_obs, r.gamma, r.gae_lambda), buf, s.next_obs)
             guide.flatten(batch.mask)
 
             # --- Optimisation ---------------------------------------------------------------------------------
@@ -146,7 +146,7 @@ def train(
                     ent = entropy.mean()
                     extra, guided = guide.loss(idx, logits, h, s.env_steps)
                     own, learned = p.frames_loss.loss(x, h)
-                    predictor, novel = p.novelty.loss(x)
+                    predictor, novel = p.novelty.loss(x, h, idx)
                     loss = pg - ent_coef * ent + r.vf_coef * v_loss + extra + own + predictor
                     if not torch.isfinite(loss):
                         raise FloatingPointError(f"loss became {loss.item()} at update {s.update}")
