@@ -230,6 +230,10 @@ TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 #: The candidate recipe's seeds run so far (docs/curves/pixels-candidates/ent02-12m/target.csv), and its flags.
 CANDIDATE_SEEDS = (0, 3, 102)
 CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02}
+#: The seventeenth session's candidate, that entropy falling to half of itself (docs/curves/pixels-candidates/
+#: ent02f05-12m/target.csv), its seeds run so far and its flags.
+CANDIDATE_F05_SEEDS = (102,)
+CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 
 
 @functools.cache
@@ -253,7 +257,12 @@ def _target_set(seed: int) -> str:
 
 
 @pytest.mark.parametrize(
-    "folder, seeds", [("pixels-seeds", TARGET_SEEDS), ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS)]
+    "folder, seeds",
+    [
+        ("pixels-seeds", TARGET_SEEDS),
+        ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS),
+        ("pixels-candidates/ent02f05-12m", CANDIDATE_F05_SEEDS),
+    ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
     """Every seed with a line in a collection's table (the preset's, a candidate's) has its curve, recipe and
@@ -347,6 +356,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         *(
             (s, f"../pixels-candidates/ent02-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02_12M)
             for s in CANDIDATE_SEEDS
+        ),
+        # The seventeenth session's: that entropy falling to half of itself over the schedule (`-- --steps 12000000
+        # --ent-coef 0.02 --ent-floor 0.5`), by the same protocol, collected apart.
+        *(
+            (s, f"../pixels-candidates/ent02f05-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02F05_12M)
+            for s in CANDIDATE_F05_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
