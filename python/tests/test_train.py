@@ -351,6 +351,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # thirteenth and fifteenth sessions) and the exploration bonus `--rnd-coef 0.5` (the fifteenth).
         (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
+        # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
+        (
+            102,
+            "p43-rndown05-seed102",
+            {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True},
+        ),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
         # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores), collected apart.
         *(
