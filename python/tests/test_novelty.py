@@ -139,7 +139,7 @@ def _own(**settings):
 
     recipe = _recipe(rnd_coef=0.5, rnd_own_value=True, **settings)
     agent = build_agent("small", (16, 16, 2), invert_frames=True)
-    return recipe, agent, novelty_of(recipe, (16, 16, 2), "cpu", agent, agent.embedding_width)
+    return recipe, agent, novelty_of(recipe, (16, 16, 2), "cpu", agent)
 
 
 def test_its_own_value_keeps_the_bonus_apart_from_the_games_reward():

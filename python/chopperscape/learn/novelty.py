@@ -92,6 +92,9 @@ def _cnn(size: tuple[int, int], head: list[int]) -> nn.Sequential:
 class RandomDistillation:
     """The bonus of a fixed random target and a predictor that learns it, on the latest frame of each stack."""
 
+    #: Whether the bonus has a value head of its own (:class:`OwnValueDistillation`): a saved state must agree.
+    own_value = False
+
     def __init__(self, coef: float, obs_shape: tuple[int, ...], num_envs: int, seed: int, device: Any):
         h, w = obs_shape[:2]
         if min(h, w) < 10:
@@ -168,7 +171,7 @@ class RandomDistillation:
     def load_state_dict(self, s: Any) -> None:
         if not isinstance(s, dict):
             raise ValueError("it holds no novelty bonus's networks, and this recipe has one (rnd_coef > 0)")
-        if ("value_head" in s) != isinstance(self, OwnValueDistillation):
+        if ("value_head" in s) != self.own_value:
             has = "has a" if "value_head" in s else "has no"
             raise ValueError(
                 f"its novelty bonus {has} value head of its own, and this recipe's differs (rnd_own_value)"
@@ -188,11 +191,13 @@ class OwnValueDistillation(RandomDistillation):
     """The bonus as the paper has it: a reward of its own, learned by a value head of its own on the policy's trunk,
     its return not cut at episode ends, joined to the game's advantage after GAE."""
 
-    def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, embedding_width: int, device: Any):
+    own_value = True
+
+    def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, device: Any):
         super().__init__(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)
         with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
             torch.manual_seed(recipe.seed + 0x52E)
-            self.value_head = nn.Linear(embedding_width, 1).to(device)
+            self.value_head = nn.Linear(agent.embedding_width, 1).to(device)
             nn.init.orthogonal_(self.value_head.weight, 1.0)  # as the critic's
             nn.init.zeros_(self.value_head.bias)
         self.params = self.params + list(self.value_head.parameters())
@@ -249,12 +254,12 @@ class OwnValueDistillation(RandomDistillation):
         self.value_head.load_state_dict(s["value_head"])
 
 
-def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: Any = None, width: int = 0) -> Any:
+def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: Any = None) -> Any:
     """The exploration part `recipe` asks for: :class:`RandomDistillation` when `rnd_coef` > 0 (a CNN recipe:
     :func:`~.recipe.check_recipe` refuses it for features), :class:`OwnValueDistillation` with `rnd_own_value`
-    (its value head reads `agent`'s embedding, `width` numbers), else :class:`NoNovelty`."""
+    (its value head reads the embedding of `agent`, a CNN agent), else :class:`NoNovelty`."""
     if recipe.rnd_coef <= 0:
         return NoNovelty()
     if recipe.rnd_own_value:
-        return OwnValueDistillation(recipe, obs_shape, agent, width, device)
+        return OwnValueDistillation(recipe, obs_shape, agent, device)
     return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)

@@ -140,5 +140,5 @@ def parts_of(recipe: Recipe, envs: VectorEnv, teacher: Any = None) -> Parts:
         device,
         net,
         frames_loss(recipe, width, obs_shape, device),
-        novelty_of(recipe, obs_shape, device, agent, width),
+        novelty_of(recipe, obs_shape, device, agent),
     )
