@@ -40,19 +40,19 @@ def test_the_bonus_is_larger_on_frames_the_predictor_has_not_learned_and_0_on_re
     seen, unseen = _frames(8, 2), _frames(8, 11)
     valid = np.ones(8, bool)
     for _ in range(4):  # the statistics see both kinds of frame; the predictor learns only the first
-        rnd.bonus(0, seen, valid), rnd.bonus(0, unseen, valid)
+        rnd.bonus(0, None, seen, valid), rnd.bonus(0, None, unseen, valid)
     for _ in range(200):
         loss, row = rnd.loss(torch.from_numpy(seen), None, torch.arange(8))
         optimizer.zero_grad()
         loss.backward()
         optimizer.step()
     assert set(row) == {"rnd_loss", "novelty"} and row["rnd_loss"] < 0.01
-    known, new = rnd.bonus(1, seen, valid), rnd.bonus(2, unseen, valid)
+    known, new = rnd.bonus(1, None, seen, valid), rnd.bonus(2, None, unseen, valid)
     assert known.dtype == np.float32 and known.shape == (8,)
     assert (new > 10 * known).all() and (known > 0).all()
     valid[[1, 5]] = False  # reset steps: no bonus, and the running sums stay
     before = rnd.running.copy()
-    out = rnd.bonus(3, unseen, valid)
+    out = rnd.bonus(3, None, unseen, valid)
     assert out[1] == 0 and out[5] == 0 and (out[valid] > 0).all()
     assert rnd.running[1] == before[1] and rnd.running[0] != before[0]
 
@@ -66,10 +66,10 @@ def test_the_bonus_reads_only_the_latest_frame_and_its_weight_scales_it():
     y = x.copy()
     y[..., 0] = 0  # another older frame: the same bonus
     valid = np.ones(4, bool)
-    out_a, out_b = a.bonus(0, x, valid), b.bonus(0, y, valid)
+    out_a, out_b = a.bonus(0, None, x, valid), b.bonus(0, None, y, valid)
     assert np.allclose(2 * out_a, out_b)
     single = RandomDistillation(1.0, (16, 16), num_envs=4, seed=3, device="cpu")  # no stack axis
-    assert np.allclose(single.bonus(0, x[..., -1], valid), out_a)
+    assert np.allclose(single.bonus(0, None, x[..., -1], valid), out_a)
 
 
 def test_making_the_networks_leaves_torchs_random_stream_as_it_is():
@@ -143,16 +143,21 @@ def _own(**settings):
 
 
 def test_its_own_value_keeps_the_bonus_apart_from_the_games_reward():
+    import torch
+
     from chopperscape.learn.novelty import OwnValueDistillation, RandomDistillation
 
     recipe, _, own = _own()
     assert isinstance(own, OwnValueDistillation)
     valid = np.array([True, False, True, True])
-    out = own.bonus(5, _frames(4, 3), valid)
+    h = torch.randn(4, 256)  # the embedding the policy acted on, from the rollout's own forward pass
+    out = own.bonus(5, h, _frames(4, 3), valid)
     assert out.dtype == np.float32 and out.shape == (4,) and not out.any()  # nothing added to the game's reward
     assert own.rewards[5, 1] == 0 and (own.rewards[5, valid] > 0).all() and not own.rewards[4].any()
+    with torch.no_grad():  # its value read from that embedding: no second pass of the trunk
+        assert torch.equal(own.values[5], own.value_head(h).squeeze(-1)) and not own.values[4].any()
     one_head = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=recipe.seed, device="cpu")
-    assert np.allclose(one_head.bonus(5, _frames(4, 3), valid), 0.5 * own.rewards[5].numpy())
+    assert np.allclose(one_head.bonus(5, None, _frames(4, 3), valid), 0.5 * own.rewards[5].numpy())
 
 
 def test_its_own_advantage_runs_across_episode_ends_and_joins_the_games():
@@ -170,10 +175,11 @@ def test_its_own_advantage_runs_across_episode_ends_and_joins_the_games():
         buf.store(t, torch.from_numpy(_frames(2, 3 * t)), zeros.long(), zeros, zeros, valid[t])
         buf.outcome(t, np.ones(2, np.float32), np.array([t == 1, False]))
     rewards = torch.tensor([[1.0, 2.0], [3.0, 4.0], [0.0, 5.0], [6.0, 7.0]])
-    with torch.no_grad():
+    with torch.no_grad():  # next_obs's value from the head; the rollout's, as its steps stored them
         own.value_head.weight.zero_()
         own.value_head.bias.fill_(1.0)
     own.rewards.copy_(rewards)
+    own.values.fill_(1.0)
     next_obs = torch.from_numpy(_frames(2, 12))
     game = advantages(buf, agent, next_obs, 0.998, 0.5)
     joined = own.advantages(game, buf, next_obs)
@@ -226,3 +232,27 @@ def test_its_own_value_is_refused_without_the_bonus(tmp_path):
     with pytest.raises(ValueError, match=r"`rnd_own_value`: it is the novelty bonus's; allowed with rnd_coef > 0"):
         train.train(_recipe(rnd_own_value=True), tmp_path / "a")
     assert not (tmp_path / "a").exists()
+
+
+def test_its_predictor_learns_from_the_given_share_of_each_minibatch(tmp_path):
+    import torch
+
+    from chopperscape.learn import train
+    from chopperscape.learn.novelty import RandomDistillation
+
+    whole = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu")
+    quarter = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu", proportion=0.25)
+    x = torch.from_numpy(np.concatenate([_frames(3, 2), _frames(9, 11)]))
+    rows = torch.arange(12)
+    with torch.no_grad():
+        assert torch.equal(whole.loss(x, None, rows)[0], whole._error(x).mean())
+        assert torch.equal(quarter.loss(x, None, rows)[0], whole._error(x[:3]).mean())  # the first 3 of 12 rows
+        assert not torch.equal(quarter.loss(x, None, rows)[0], whole.loss(x, None, rows)[0])
+        tiny = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu", proportion=0.01)
+        assert torch.equal(tiny.loss(x, None, rows)[0], whole._error(x[:1]).mean())  # at least one row
+    with pytest.raises(ValueError, match=r"`rnd_proportion`: it is the novelty bonus's; allowed with rnd_coef > 0"):
+        train.train(_recipe(rnd_proportion=0.25), tmp_path / "a")
+    for bad in (0.0, 1.5, float("nan")):
+        with pytest.raises(ValueError, match=r"`rnd_proportion`"):
+            train.train(_recipe(rnd_coef=0.5, rnd_proportion=bad), tmp_path / "b")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

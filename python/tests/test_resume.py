@@ -86,16 +86,17 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch, 
 
 
 @pytest.mark.parametrize(
-    ("aux_coef", "recon_coef", "rnd_coef", "own"),
+    ("aux_coef", "recon_coef", "rnd_coef", "novelty"),
     [
-        (0.0, 0.0, 0.0, False),
-        (0.5, 0.0, 0.0, False),
-        (0.0, 2.0, 0.0, False),
-        (0.0, 0.0, 0.5, False),
-        (0.0, 0.0, 0.5, True),
+        (0.0, 0.0, 0.0, {}),
+        (0.5, 0.0, 0.0, {}),
+        (0.0, 2.0, 0.0, {}),
+        (0.0, 0.0, 0.5, {}),
+        (0.0, 0.0, 0.5, {"rnd_own_value": True}),
+        (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_proportion": 0.5}),
     ],
 )
-def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef, own):
+def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef, novelty):
     from chopperscape.learn import train
     from chopperscape.learn.recipe import Recipe
 
@@ -109,7 +110,7 @@ def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux
         aux_coef=aux_coef,
         recon_coef=recon_coef,
         rnd_coef=rnd_coef,
-        rnd_own_value=own,
+        **novelty,
         augment="shift",
         total_steps=4 * 16 * 5,
     )

@@ -49,6 +49,8 @@ def no_training(monkeypatch):
         (["--ent-floor", "1.5"], "ent_floor"),
         (["--ent-floor", "nan"], "ent_floor"),
         (["--rnd-own-value"], "rnd_own_value`: it is the novelty bonus"),
+        (["--rnd-proportion", "0.25"], "rnd_proportion`: it is the novelty bonus"),
+        (["--rnd-coef", "0.5", "--rnd-proportion", "0"], "rnd_proportion"),
         (["--option", "obs_type=rgb"], "--obs-type"),
         (["--option", "num_threads=2"], "--env-threads"),
         (["--option", "lives=0"], "lives"),

@@ -12,6 +12,7 @@ its gradients. Sampling stays eager: :func:`~.networks.act_on`, what :meth:`Acto
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import Any, NamedTuple
 
 import torch
@@ -24,9 +25,10 @@ Heads = Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor 
 
 
 class Network(NamedTuple):
-    """What the loop calls of the network: `act` in the rollout, `heads` in the update."""
+    """What the loop calls of the network: `act` in the rollout (:func:`~.networks.act_on`: the action, its
+    log-probability, the entropy, the value and the embedding), `heads` in the update."""
 
-    act: Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]]
+    act: Callable[[torch.Tensor], tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None]]
     heads: Heads
 
 
@@ -49,7 +51,7 @@ def network_for(recipe: Recipe, agent: ActorCritic) -> Network:
     """The agent's `act` and `heads` as `recipe` runs them: eager, or compiled for the rollout's batch
     (`num_envs`) and the update's largest minibatch."""
     if not recipe.torch_compile:
-        return Network(agent.act, agent.heads)
+        return Network(partial(act_on, agent.heads), agent.heads)
     compiled: Any = torch.compile(agent.heads, dynamic=False, fullgraph=True)
     batch = recipe.num_envs * recipe.num_steps
     minibatch = -(-batch // recipe.num_minibatches)

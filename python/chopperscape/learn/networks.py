@@ -47,17 +47,18 @@ class ActorCritic(nn.Module):
 
     def act(self, x: torch.Tensor, action: torch.Tensor | None = None):
         """`(action, log-probability, entropy, value)`; the action is sampled unless given."""
-        return act_on(self.heads, x, action)
+        return act_on(self.heads, x, action)[:4]
 
 
 def act_on(heads, x: torch.Tensor, action: torch.Tensor | None = None):
-    """:meth:`ActorCritic.act` through any `heads` function (the agent's own, or a compiled one): `(action,
-    log-probability, entropy, value)`, the action sampled from torch's stream unless given."""
-    logits, value, _ = heads(x)
+    """:meth:`ActorCritic.act` through any `heads` function (the agent's own, or a compiled one), with the embedding
+    the heads read: `(action, log-probability, entropy, value, embedding)`, the action sampled from torch's stream
+    unless given (the embedding None for separate networks)."""
+    logits, value, h = heads(x)
     dist = torch.distributions.Categorical(logits=logits)
     if action is None:
         action = dist.sample()
-    return action, dist.log_prob(action), dist.entropy(), value
+    return action, dist.log_prob(action), dist.entropy(), value, h
 
 
 class Agent(ActorCritic):

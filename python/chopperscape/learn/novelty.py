@@ -21,8 +21,8 @@ advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). 
 the bonus's value head is part of the policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
-calls `bonus(t, raw, valid)` at each rollout step, `advantages(batch, buf, next_obs)` after GAE and `loss(x, h, idx)`
-on each minibatch.
+calls `bonus(t, h, raw, valid)` at each rollout step (`h`, the embedding the policy acted on), `advantages(batch, buf,
+next_obs)` after GAE and `loss(x, h, idx)` on each minibatch.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ class NoNovelty:
     def params(self) -> list[nn.Parameter]:
         return []
 
-    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> float:
+    def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> float:
         return 0.0
 
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
@@ -95,11 +95,13 @@ class RandomDistillation:
     #: Whether the bonus has a value head of its own (:class:`OwnValueDistillation`): a saved state must agree.
     own_value = False
 
-    def __init__(self, coef: float, obs_shape: tuple[int, ...], num_envs: int, seed: int, device: Any):
+    def __init__(
+        self, coef: float, obs_shape: tuple[int, ...], num_envs: int, seed: int, device: Any, proportion: float = 1.0
+    ):
         h, w = obs_shape[:2]
         if min(h, w) < 10:
             raise ValueError(f"frames of {h}×{w} are too small for the novelty bonus's networks (at least 10×10)")
-        self.coef, self.device = coef, device
+        self.coef, self.device, self.proportion = coef, device, proportion
         # Its own random stream: the networks are drawn inside a fork of torch's, so the policy's initialisation
         # and the action sampling stay what they are without the bonus.
         with torch.random.fork_rng(devices=[]):
@@ -142,8 +144,9 @@ class RandomDistillation:
             self.since = [self.since[0] + float(error[valid].sum()), self.since[1] + int(valid.sum())]
         return np.where(valid, error / math.sqrt(float(self.errors.var) + 1e-8), 0.0)
 
-    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward."""
+    def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward;
+        `raw` are the observations the step returned (`h`, the embedding the policy acted on, is the own value's)."""
         return (self.coef * self.scaled(raw, valid)).astype(np.float32)  # as in runs before `scaled` was split out
 
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
@@ -152,11 +155,12 @@ class RandomDistillation:
 
     def loss(self, x: torch.Tensor, h: torch.Tensor | None, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
         """The predictor's loss on a minibatch `x` (the target fixed), unweighted: it trains only the predictor, whose
-        parameters nothing else reads (`h` and `idx`, the minibatch's embedding and rows, are the own value's). The
-        columns add `novelty`, the mean raw error of the valid steps of the rollout this update learns from."""
+        parameters nothing else reads (`h` and `idx`, the minibatch's embedding and rows, are the own value's), on
+        the first `proportion` of the minibatch's rows (a random share: the rows are a permutation's). The columns add
+        `novelty`, the mean raw error of the valid steps of the rollout this update learns from."""
         if self.since[1]:  # the update's first minibatch: the rollout's steps are all in
             self.reported, self.since = self.since[0] / self.since[1], [0.0, 0]
-        err = self._error(x).mean()
+        err = self._error(x[: max(1, round(len(x) * self.proportion))]).mean()
         return err, {"rnd_loss": err.item(), "novelty": self.reported}
 
     def state_dict(self) -> dict[str, Any]:
@@ -194,7 +198,7 @@ class OwnValueDistillation(RandomDistillation):
     own_value = True
 
     def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, device: Any):
-        super().__init__(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)
+        super().__init__(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion)
         with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
             torch.manual_seed(recipe.seed + 0x52E)
             self.value_head = nn.Linear(agent.embedding_width, 1).to(device)
@@ -203,18 +207,17 @@ class OwnValueDistillation(RandomDistillation):
         self.params = self.params + list(self.value_head.parameters())
         self.agent, self.gae_lambda, self.vf_coef = agent, recipe.gae_lambda, recipe.vf_coef
         self.rewards = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)
+        self.values = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)  # the head's, at the rollout
         self.returns = torch.zeros(0, device=device)
 
-    def bonus(self, t: int, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """Keeps rollout step `t`'s bonus as a reward of its own; the game's reward gets nothing added."""
+    @torch.no_grad()
+    def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """Keeps rollout step `t`'s bonus as a reward of its own, and the bonus's value of the observation the policy
+        acted on (read from `h`, the embedding its forward pass gave: no second pass over the rollout); the game's
+        reward gets nothing added."""
+        self.values[t] = self.value_head(cast(torch.Tensor, h)).squeeze(-1)
         self.rewards[t] = torch.from_numpy(self.scaled(raw, valid).astype(np.float32)).to(self.device)
         return np.zeros(len(valid), np.float32)
-
-    @torch.no_grad()
-    def values(self, obs: torch.Tensor) -> torch.Tensor:
-        """The bonus's value of each observation (a batch of the network's inputs), in chunks of 1,024."""
-        out = [self.value_head(self.agent.heads(x)[2]).squeeze(-1) for x in obs.split(1024)]
-        return torch.cat(out)
 
     @torch.no_grad()
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
@@ -223,8 +226,9 @@ class OwnValueDistillation(RandomDistillation):
         carries nothing: the step that ended an episode bootstraps from the next episode's first). The bonus's
         returns, the value head's targets, are kept for :meth:`loss`."""
         t_len, n = self.rewards.shape
-        values = self.values(buf.obs.reshape(-1, *buf.obs_shape)).reshape(t_len, n)
-        next_value, last = self.values(next_obs), torch.zeros(n, device=self.device)
+        values = self.values
+        next_value = self.value_head(self.agent.heads(next_obs)[2]).squeeze(-1)
+        last = torch.zeros(n, device=self.device)
         adv = torch.zeros((t_len, n), device=self.device)
         for t in reversed(range(t_len)):
             valid = buf.valid[t].bool()
@@ -262,4 +266,5 @@ def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: A
         return NoNovelty()
     if recipe.rnd_own_value:
         return OwnValueDistillation(recipe, obs_shape, agent, device)
-    return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device)
+    r = recipe
+    return RandomDistillation(r.rnd_coef, obs_shape, r.num_envs, r.seed, device, r.rnd_proportion)

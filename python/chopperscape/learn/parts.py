@@ -83,7 +83,7 @@ class Parts(NamedTuple):
     net: Network
     #: A self-supervised loss from the frames alone (:mod:`.selfsup`): `loss(frames, embedding)` per minibatch.
     frames_loss: Any
-    #: An exploration bonus from the frames alone (:mod:`.novelty`): `bonus(t, raw, valid)` per env step, added to
+    #: An exploration bonus from the frames alone (:mod:`.novelty`): `bonus(t, h, raw, valid)` per env step, added to
     #: the scaled reward (or kept as a reward of its own), `advantages(batch, buf, next_obs)` after GAE (its own
     #: advantage joined to the game's), and `loss(frames, embedding, rows)` per minibatch.
     novelty: Any

@@ -47,6 +47,7 @@ RECIPE_FLAGS = (
     "recon_coef",
     "rnd_coef",
     "rnd_own_value",
+    "rnd_proportion",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -231,6 +232,9 @@ class Recipe:
     #: With `rnd_coef`: the bonus as the paper has it, a reward with a value head of its own on the trunk, its return
     #: not cut at episode ends, `rnd_coef` weighing its advantage. False (the default): added to the game's reward.
     rnd_own_value: bool = False
+    #: With `rnd_coef`: the share of each minibatch the bonus's predictor learns from (CleanRL's `update_proportion`,
+    #: 0.25 there): a cheaper update, a slower-learning predictor. 1.0 (the default): all of it.
+    rnd_proportion: float = 1.0
 
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
@@ -242,6 +246,7 @@ LATER_SETTINGS: dict[str, Any] = {
     "rnd_coef": 0.0,
     "ent_floor": 1.0,
     "rnd_own_value": False,
+    "rnd_proportion": 1.0,
 }
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -326,6 +331,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("aux_coef", r.aux_coef, 0.0, 1000.0)
     number_in("recon_coef", r.recon_coef, 0.0, 1000.0)
     number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
+    number_in("rnd_proportion", r.rnd_proportion, 0.0, 1.0, low_open=True)
     number_in("teacher_coef", r.teacher_coef, 0.0, 1000.0)
     number_in("teacher_fade", r.teacher_fade, 0.0, 1.0, low_open=True)
     if not isinstance(r.teacher, str):
@@ -341,25 +347,22 @@ def check_recipe(recipe: Recipe) -> None:
         raise ValueError(f"invalid value {r.network!r} for option `network`: allowed {', '.join(map(repr, NETWORKS))}")
     check_device(r.device)
     mlp = r.network == "mlp" or (r.network == "auto" and r.obs_type == "features")
-    if r.aux_coef > 0 and mlp:
-        raise ValueError(
-            f"invalid value {r.aux_coef!r} for option `aux_coef`: the auxiliary features loss is for CNN recipes "
-            "(pixel observations); allowed 0 here"
-        )
-    if r.recon_coef > 0 and mlp:
-        raise ValueError(
-            f"invalid value {r.recon_coef!r} for option `recon_coef`: the reconstruction loss is for CNN recipes "
-            "(pixel observations); allowed 0 here"
-        )
-    if r.rnd_coef > 0 and mlp:
-        raise ValueError(
-            f"invalid value {r.rnd_coef!r} for option `rnd_coef`: the novelty bonus is for CNN recipes "
-            "(pixel observations); allowed 0 here"
-        )
-    if r.rnd_own_value and r.rnd_coef <= 0:
-        raise ValueError(
-            "invalid value True for option `rnd_own_value`: it is the novelty bonus's; allowed with rnd_coef > 0"
-        )
+    for name, what in (
+        ("aux_coef", "the auxiliary features loss"),
+        ("recon_coef", "the reconstruction loss"),
+        ("rnd_coef", "the novelty bonus"),
+    ):
+        if getattr(r, name) > 0 and mlp:
+            raise ValueError(
+                f"invalid value {getattr(r, name)!r} for option `{name}`: {what} is for CNN recipes (pixel "
+                "observations); allowed 0 here"
+            )
+    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0)):
+        if getattr(r, name) != unset and r.rnd_coef <= 0:
+            raise ValueError(
+                f"invalid value {getattr(r, name)!r} for option `{name}`: it is the novelty bonus's; allowed with "
+                f"rnd_coef > 0 (else {unset})"
+            )
     if r.augment != "none" and mlp:
         raise ValueError(
             f"invalid value {r.augment!r} for option `augment`: augmentation is for CNN recipes (pixel observations); "

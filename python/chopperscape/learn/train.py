@@ -112,7 +112,7 @@ def train(
             for t in range(r.num_steps):
                 valid = ~s.next_done
                 with torch.inference_mode():
-                    action, logp, _, value = act(s.next_obs)
+                    action, logp, _, value, h = act(s.next_obs)
                 buf.store(t, s.next_obs, action, logp, value, valid)
                 actions = action.cpu().numpy()
                 guide.store(t)
@@ -121,7 +121,7 @@ def train(
                 s.env_steps += int(valid.sum())
                 s.episodes.record(reward, valid, term, trunc, info)
                 done = term | trunc
-                buf.outcome(t, s.rewards(reward, valid, done) + p.novelty.bonus(t, raw, valid), done)
+                buf.outcome(t, s.rewards(reward, valid, done) + p.novelty.bonus(t, h, raw, valid), done)
                 s.next_done = done
                 s.next_obs = encode(raw)
 
