@@ -232,7 +232,7 @@ CANDIDATE_SEEDS = (0, 3, 102)
 CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02}
 #: The seventeenth session's candidate, that entropy falling to half of itself (docs/curves/pixels-candidates/
 #: ent02f05-12m/target.csv), its seeds run so far and its flags.
-CANDIDATE_F05_SEEDS = (102,)
+CANDIDATE_F05_SEEDS = (0, 102)
 CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 
 
