@@ -357,6 +357,18 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
             "p43-rndown05-seed102",
             {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True},
         ),
+        # The eighteenth session's RND with its own value at a quarter share (18 minutes, alone on both cores).
+        (
+            102,
+            "p43-rndown25-seed102",
+            {
+                "torch_compile": True,
+                "torch_threads": 2,
+                "rnd_coef": 0.5,
+                "rnd_own_value": True,
+                "rnd_proportion": 0.25,
+            },
+        ),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {"torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
