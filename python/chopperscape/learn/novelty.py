@@ -226,7 +226,7 @@ class OwnValueDistillation(RandomDistillation):
         carries nothing: the step that ended an episode bootstraps from the next episode's first). The bonus's
         returns, the value head's targets, are kept for :meth:`loss`."""
         t_len, n = self.rewards.shape
-        values = self.values
+        values = self.values  # the head's at each step, stored by `bonus` from the rollout's own pass
         next_value = self.value_head(self.agent.heads(next_obs)[2]).squeeze(-1)
         last = torch.zeros(n, device=self.device)
         adv = torch.zeros((t_len, n), device=self.device)
@@ -266,5 +266,4 @@ def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: A
         return NoNovelty()
     if recipe.rnd_own_value:
         return OwnValueDistillation(recipe, obs_shape, agent, device)
-    r = recipe
-    return RandomDistillation(r.rnd_coef, obs_shape, r.num_envs, r.seed, device, r.rnd_proportion)
+    return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion)
