@@ -234,6 +234,10 @@ CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps":
 #: ent02f05-12m/target.csv), its seeds run so far and its flags.
 CANDIDATE_F05_SEEDS = (0, 102)
 CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
+#: The nineteenth session's: RND with its own value head on the preset's 8 M schedule (docs/curves/pixels-candidates/
+#: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed), its seeds run so far and its flags.
+CANDIDATE_RNDOWN05_SEEDS = (102,)
+CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
 
 
 @functools.cache
@@ -262,6 +266,7 @@ def _target_set(seed: int) -> str:
         ("pixels-seeds", TARGET_SEEDS),
         ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS),
         ("pixels-candidates/ent02f05-12m", CANDIDATE_F05_SEEDS),
+        ("pixels-candidates/rndown05", CANDIDATE_RNDOWN05_SEEDS),
     ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
@@ -382,6 +387,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         *(
             (s, f"../pixels-candidates/ent02f05-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02F05_12M)
             for s in CANDIDATE_F05_SEEDS
+        ),
+        # The nineteenth session's: RND 0.5 with its own value head on the 8 M schedule (`-- --rnd-coef 0.5
+        # --rnd-own-value`), by the same protocol, collected apart.
+        *(
+            (s, f"../pixels-candidates/rndown05/{_target_set(s)}/seed-{s}", CANDIDATE_RNDOWN05)
+            for s in CANDIDATE_RNDOWN05_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
