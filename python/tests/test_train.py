@@ -362,6 +362,8 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
             "p43-rndown05-seed102",
             {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True},
         ),
+        # The nineteenth session's seed 0 of it, by the target's protocol, cut by its minutes at 6.35 M.
+        (0, "p43-rndown05-seed0", {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}),
         # The eighteenth session's RND with its own value at a quarter share (18 minutes, alone on both cores).
         (
             102,
