@@ -357,25 +357,11 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
-        (
-            102,
-            "p43-rndown05-seed102",
-            {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True},
-        ),
+        (102, "p43-rndown05-seed102", CANDIDATE_RNDOWN05),
         # The nineteenth session's seed 0 of it, by the target's protocol, cut by its minutes at 6.35 M.
-        (0, "p43-rndown05-seed0", {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}),
+        (0, "p43-rndown05-seed0", CANDIDATE_RNDOWN05),
         # The eighteenth session's RND with its own value at a quarter share (18 minutes, alone on both cores).
-        (
-            102,
-            "p43-rndown25-seed102",
-            {
-                "torch_compile": True,
-                "torch_threads": 2,
-                "rnd_coef": 0.5,
-                "rnd_own_value": True,
-                "rnd_proportion": 0.25,
-            },
-        ),
+        (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {"torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
