@@ -235,8 +235,9 @@ CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps":
 CANDIDATE_F05_SEEDS = (0, 102)
 CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: The nineteenth session's: RND with its own value head on the preset's 8 M schedule (docs/curves/pixels-candidates/
-#: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed), its seeds run so far and its flags.
-CANDIDATE_RNDOWN05_SEEDS = (102,)
+#: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's in one call),
+#: its seeds run so far and its flags.
+CANDIDATE_RNDOWN05_SEEDS = (0, 102)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
 
 
