@@ -235,9 +235,9 @@ CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps":
 CANDIDATE_F05_SEEDS = (0, 102)
 CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: The nineteenth session's: RND with its own value head on the preset's 8 M schedule (docs/curves/pixels-candidates/
-#: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's in one call),
-#: its seeds run so far and its flags.
-CANDIDATE_RNDOWN05_SEEDS = (0, 102)
+#: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's and seed 2 the
+#: twenty-first's, each in one call), its seeds run so far and its flags.
+CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
 
 
@@ -359,8 +359,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndown05-seed102", CANDIDATE_RNDOWN05),
-        # The twentieth session's seed 2 of it, by the target's protocol, stopped by the session at 1.94 M of 8 M.
-        (2, "p43-rndown05-seed2", CANDIDATE_RNDOWN05),
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
