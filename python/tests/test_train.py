@@ -359,6 +359,8 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndown05-seed102", CANDIDATE_RNDOWN05),
+        # The twenty-first session's seed 103 of it, by the target's protocol, stopped by the session at 3.76 M of 8 M.
+        (103, "p43-rndown05-seed103", CANDIDATE_RNDOWN05),
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
