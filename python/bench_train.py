@@ -17,13 +17,16 @@ minibatches through the native adapter (`chopperscape.integrations.sb3`, `VecNor
 in the same run: the anchor a user would pick instead. ``--rust PATH`` adds, for the ``fast`` and ``features``
 cases, the Rust learner (``PATH train --preset CASE --phases``, ``PATH`` the ``chopperscape`` command line:
 docs/rust-learner.md) at each of ``--rust-threads`` (default 1 and 2), same steps, same run: its phases, timed at
-the same places, in columns beside torch's, with its wall and CPU seconds. ``--smoke`` runs each case for a few
+the same places, in columns beside torch's, with its wall and CPU seconds. ``--set FIELD=VALUE`` sets a recipe
+setting of every case (``--set rnd_coef=0.5 --set rnd_own_value=true``: the exploration bonus, whose forward passes
+and loss fall in ``bookkeeping``, its predictor's gradients in ``backward``). ``--smoke`` runs each case for a few
 updates of a tiny batch (seconds: the test command runs it so that it cannot rot; its figures mean nothing).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -44,7 +47,7 @@ import torch  # noqa: E402
 from chopperscape import NUM_ACTIONS, VectorEnv  # noqa: E402
 from chopperscape.learn import networks, normalize, train  # noqa: E402
 from chopperscape.learn.phases import PHASES, Phases  # noqa: E402
-from chopperscape.learn.recipe import PRESETS, Recipe, network_of  # noqa: E402
+from chopperscape.learn.recipe import PRESETS, Recipe, check_recipe, network_of  # noqa: E402
 
 CASES = [name for name in ("features", "fast", "pixels") if name in PRESETS]
 
@@ -54,6 +57,26 @@ def recipe_for(case: str, steps: int, device: str, smoke: bool) -> Recipe:
     if smoke:
         r = replace(r, num_envs=8, num_steps=16, num_minibatches=2, update_epochs=2)
     return r
+
+
+def with_settings(recipe: Recipe, settings: list[str]) -> Recipe:
+    """`recipe` with each ``FIELD=VALUE`` of `settings` (VALUE as JSON, else as text), checked as a recipe file's
+    settings are; exits naming the first that is not a setting or is out of range."""
+    fields = {f.name for f in dataclasses.fields(Recipe)}
+    for item in settings:
+        name, sep, text = item.partition("=")
+        if not sep or name not in fields:
+            raise SystemExit(f"--set {item!r}: expected FIELD=VALUE, FIELD one of {', '.join(sorted(fields))}")
+        try:
+            value = json.loads(text)
+        except json.JSONDecodeError:
+            value = text
+        recipe = replace(recipe, **{name: value})
+    try:
+        check_recipe(recipe)
+    except ValueError as e:
+        raise SystemExit(f"--set: {e}") from None
+    return recipe
 
 
 def floors(recipe: Recipe, repeats: int = 3) -> dict[str, float]:
@@ -163,6 +186,13 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="the CNN cases' network through torch.compile (--torch-compile; the floors stay eager)",
     )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="a recipe setting of every case, VALUE read as JSON else as text (e.g. rnd_coef=0.5); checked",
+    )
     p.add_argument("--rust", metavar="PATH", help="the chopperscape command line: its learner beside torch's")
     p.add_argument("--rust-threads", default="1,2", help="the Rust learner's thread counts (default 1,2)")
     a = p.parse_args(argv)
@@ -184,6 +214,7 @@ def main(argv: list[str] | None = None) -> int:
             recipe = replace(recipe, update_epochs=a.epochs)
         if a.minibatches is not None:
             recipe = replace(recipe, num_minibatches=a.minibatches)
+        recipe = with_settings(recipe, a.set)
         torch.set_num_threads(recipe.torch_threads)
         phases = Phases()
         with tempfile.TemporaryDirectory() as out:

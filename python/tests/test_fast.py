@@ -104,3 +104,19 @@ def test_the_phase_benchmark_runs_and_accounts_for_every_phase():
     assert any(line.startswith("## fast:") for line in lines)
     assert any(line.startswith("Rust learner, 1 thread(s): ") for line in lines), out.stdout
     assert any(line.startswith("SB3 PPO, the same network") for line in lines), out.stdout
+
+
+def test_the_phase_benchmark_takes_recipe_settings_and_refuses_what_is_not_one():
+    """`--set FIELD=VALUE` (the exploration bonus's cost, measured): checked as a recipe's settings are."""
+    cmd = [sys.executable, str(ROOT / "python" / "bench_train.py"), "--smoke", "--case", "pixels"]
+    bonus = ["--set", "rnd_coef=0.5", "--set", "rnd_own_value=true", "--set", "rnd_pool=2"]
+    out = subprocess.run([*cmd, *bonus], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert any(line.startswith("## pixels:") for line in out.stdout.splitlines())
+    for bad, says in (
+        ("rnd_pool=3", "`rnd_pool`: allowed 1, 2, 4"),
+        ("rnd_pooling=2", "FIELD one of"),
+        ("rnd_pool", "expected FIELD=VALUE"),
+    ):
+        out = subprocess.run([*cmd, *bonus[:4], "--set", bad], capture_output=True, text=True, timeout=300, cwd=ROOT)
+        assert out.returncode != 0 and says in out.stderr and "## pixels" not in out.stdout, (bad, out.stderr)

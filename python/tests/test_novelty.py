@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -72,6 +73,33 @@ def test_the_bonus_reads_only_the_latest_frame_and_its_weight_scales_it():
     assert np.allclose(single.bonus(0, None, x[..., -1], valid), out_a)
 
 
+def test_pooled_the_bonus_is_the_bonus_of_the_pooled_frame():
+    """`rnd_pool` 2 on 32×32 frames is the plain bonus on their 16×16 halves: the same networks (drawn for the
+    pooled size), statistics, errors and predictor loss; older frames still unread. A frame too small once pooled
+    is refused, naming the pooling."""
+    import torch
+
+    from chopperscape.learn.novelty import RandomDistillation
+
+    big = RandomDistillation(1.0, (32, 32, 2), num_envs=4, seed=3, device="cpu", pool=2)
+    small = RandomDistillation(1.0, (16, 16, 2), num_envs=4, seed=3, device="cpu")
+    rng = np.random.default_rng(0)
+    valid = np.array([True, True, False, True])
+    for t in range(3):
+        x = rng.integers(1, 255, (4, 16, 16, 2), dtype=np.uint8)
+        wide = x.repeat(2, axis=1).repeat(2, axis=2)  # each pixel a 2×2 square: pooling gives `x` back exactly,
+        wide[:, ::2, ::2, -1] += 1  # though each square's four pixels differ (their mean is still `x`'s)
+        wide[:, 1::2, 1::2, -1] -= 1
+        wide[..., 0] = rng.integers(0, 256, (4, 32, 32))  # older frames: anything
+        assert np.array_equal(big.bonus(t, None, wide, valid), small.bonus(t, None, x, valid))
+    assert np.array_equal(big.frames.mean, small.frames.mean) and np.array_equal(big.running, small.running)
+    loss_big, _ = big.loss(torch.from_numpy(wide), None, torch.arange(4))
+    loss_small, _ = small.loss(torch.from_numpy(x), None, torch.arange(4))
+    assert torch.equal(loss_big, loss_small)
+    with pytest.raises(ValueError, match=r"16×16, 2×2 pixels averaged into one, are too small .* after pooling"):
+        RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=0, device="cpu", pool=2)
+
+
 def test_making_the_networks_leaves_torchs_random_stream_as_it_is():
     import torch
 
@@ -114,7 +142,7 @@ def test_a_run_with_it_logs_it_and_saves_the_same_kind_of_policy(tmp_path):
 def test_it_is_refused_where_it_means_nothing_before_anything_is_written(tmp_path):
     from chopperscape.learn import train
     from chopperscape.learn.novelty import NoNovelty, RandomDistillation
-    from chopperscape.learn.recipe import Recipe
+    from chopperscape.learn.recipe import Recipe, check_recipe
 
     with pytest.raises(ValueError, match=r"`rnd_coef`: the novelty bonus is for CNN recipes"):
         train.train(Recipe(rnd_coef=1.0), tmp_path / "a")
@@ -122,6 +150,9 @@ def test_it_is_refused_where_it_means_nothing_before_anything_is_written(tmp_pat
         train.train(_recipe(rnd_coef=-1.0), tmp_path / "b")
     with pytest.raises(ValueError, match=r"too small for the novelty bonus"):
         RandomDistillation(1.0, (8, 8, 2), num_envs=2, seed=0, device="cpu")
+    for pool in (3, 2.0, True):  # a pool from a recipe file: a power of two, and a whole number
+        with pytest.raises(ValueError, match=r"`rnd_pool`: allowed 1, 2, 4"):
+            check_recipe(replace(_recipe(rnd_coef=0.5), rnd_pool=pool))
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
     rnd = RandomDistillation(1.0, (16, 16, 2), num_envs=2, seed=0, device="cpu")
     with pytest.raises(ValueError, match="holds a novelty bonus"):

@@ -94,15 +94,17 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch, 
         (0.0, 0.0, 0.5, {}),
         (0.0, 0.0, 0.5, {"rnd_own_value": True}),
         (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_proportion": 0.5}),
+        (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_pool": 2}),
     ],
 )
 def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef, novelty):
     from chopperscape.learn import train
     from chopperscape.learn.recipe import Recipe
 
+    side = 16 * novelty.get("rnd_pool", 1)  # the bonus's networks read at least 10×10 once pooled
     recipe = Recipe(
         obs_type="grayscale",
-        env_options={"obs_size": [16, 16], "frame_stack": 2, "max_fuel": 120},
+        env_options={"obs_size": [side, side], "frame_stack": 2, "max_fuel": 120},
         network="small",
         num_envs=4,
         num_steps=16,

@@ -11,14 +11,15 @@ docs/notes/pixels-speed-and-probes.md, fifteenth session). Entropy spreads a pol
 pulls it toward the frames it has not seen, the ones at the other end of the sky.
 
 As CleanRL's `ppo_rnd_envpool.py` does, save what the 2-core pixel loop asks: the latest frame of each stack, each
-pixel standardised by running statistics and clipped to ±5; the error (mean squared over the 128 outputs) divided by
-the running standard deviation of its discounted sum (γ 0.99, not cut at episode ends); the predictor trained on
-every minibatch. By default one value head: the bonus, times `rnd_coef`, is added to the step's scaled reward and
-cut at episode ends, so it also pays for surviving, wherever the chopper is. With `rnd_own_value`
-(:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a value head of its own
-on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the policy learns from the
-advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training only: neither network nor
-the bonus's value head is part of the policy, the saved model or its export.
+pixel standardised by running statistics and clipped to ±5 (with `rnd_pool` P, each P × P square of pixels averaged
+into one first: at P = 2 a quarter of the pixels, the networks' work cut about sixfold); the error (mean squared over
+the 128 outputs) divided by the running standard deviation of its discounted sum (γ 0.99, not cut at episode ends);
+the predictor trained on every minibatch. By default one value head: the bonus, times `rnd_coef`, is added to the
+step's scaled reward and cut at episode ends, so it also pays for surviving, wherever the chopper is. With
+`rnd_own_value` (:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a
+value head of its own on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the
+policy learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training
+only: neither network nor the bonus's value head is part of the policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
 calls `bonus(t, h, raw, valid)` at each rollout step (`h`, the embedding the policy acted on), `advantages(batch, buf,
@@ -96,12 +97,23 @@ class RandomDistillation:
     own_value = False
 
     def __init__(
-        self, coef: float, obs_shape: tuple[int, ...], num_envs: int, seed: int, device: Any, proportion: float = 1.0
+        self,
+        coef: float,
+        obs_shape: tuple[int, ...],
+        num_envs: int,
+        seed: int,
+        device: Any,
+        proportion: float = 1.0,
+        pool: int = 1,
     ):
-        h, w = obs_shape[:2]
+        h, w = obs_shape[0] // pool, obs_shape[1] // pool
         if min(h, w) < 10:
-            raise ValueError(f"frames of {h}×{w} are too small for the novelty bonus's networks (at least 10×10)")
-        self.coef, self.device, self.proportion = coef, device, proportion
+            pooled = f", {pool}×{pool} pixels averaged into one," if pool > 1 else ""
+            raise ValueError(
+                f"frames of {obs_shape[0]}×{obs_shape[1]}{pooled} are too small for the novelty bonus's networks "
+                "(at least 10×10 after pooling)"
+            )
+        self.coef, self.device, self.proportion, self.pool = coef, device, proportion, pool
         # Its own random stream: the networks are drawn inside a fork of torch's, so the policy's initialisation
         # and the action sampling stay what they are without the bonus.
         with torch.random.fork_rng(devices=[]):
@@ -110,16 +122,25 @@ class RandomDistillation:
             self.predictor = _cnn((h, w), [256, 256, OUTPUT_WIDTH]).to(device)
         self.target.requires_grad_(False)
         self.params = list(self.predictor.parameters())
-        self.frames = RunningMeanStd((h, w))  # each pixel's running mean and variance
+        self.frames = RunningMeanStd((h, w))  # each (pooled) pixel's running mean and variance
         self.errors = RunningMeanStd(())  # of the bonus's discounted running sum
         self.running = np.zeros(num_envs)
         self.since = [0.0, 0]  # the raw errors' sum and count since the last update, for the progress columns
         self.reported = 0.0
 
-    def _input(self, x: torch.Tensor) -> torch.Tensor:
-        """`(N, 1, H, W)`: each stack's latest frame (uint8, ``(N, H, W)`` or ``(N, H, W, k)``), standardised by the
-        running statistics and clipped to ±5."""
+    def _latest(self, x: torch.Tensor) -> torch.Tensor:
+        """`(N, H / pool, W / pool)` float32: each stack's latest frame (uint8, ``(N, H, W)`` or ``(N, H, W, k)``),
+        each `pool` × `pool` square of pixels averaged into one (exact: `pool` is 1, 2 or 4, a power of two), a
+        remainder row or column dropped."""
         latest = (x if x.dim() == 3 else x[..., -1]).float()
+        if self.pool > 1:
+            latest = torch.nn.functional.avg_pool2d(latest.unsqueeze(1), self.pool).squeeze(1)
+        return latest
+
+    def _input(self, x: torch.Tensor) -> torch.Tensor:
+        """`(N, 1, H / pool, W / pool)`: each stack's latest frame (:meth:`_latest`), standardised by the running
+        statistics and clipped to ±5."""
+        latest = self._latest(x)
         mean = torch.as_tensor(self.frames.mean, dtype=torch.float32, device=latest.device)
         std = torch.as_tensor(np.sqrt(self.frames.var + 1e-8), dtype=torch.float32, device=latest.device)
         return ((latest - mean) / std).clamp(-5.0, 5.0).unsqueeze(1)
@@ -133,11 +154,15 @@ class RandomDistillation:
         """The unweighted bonus (float64) of each env's step that led to `raw` (the observations the step returned),
         0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
         any_valid = bool(valid.any())
+        x = torch.from_numpy(raw)
         if any_valid:
-            latest = raw if raw.ndim == 3 else raw[..., -1]
-            self.frames.update(latest[valid].astype(np.float64))
+            if self.pool > 1:
+                self.frames.update(self._latest(x[torch.from_numpy(valid)]).double().numpy())
+            else:  # the frames as they are: the bytes as float64, as the runs before pooling existed
+                latest = raw if raw.ndim == 3 else raw[..., -1]
+                self.frames.update(latest[valid].astype(np.float64))
         with torch.inference_mode():
-            error = self._error(torch.from_numpy(raw).to(self.device)).double().cpu().numpy()
+            error = self._error(x.to(self.device)).double().cpu().numpy()
         self.running = np.where(valid, self.running * GAMMA_INTRINSIC + error, self.running)
         if any_valid:
             self.errors.update(self.running[valid])
@@ -198,7 +223,15 @@ class OwnValueDistillation(RandomDistillation):
     own_value = True
 
     def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, device: Any):
-        super().__init__(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion)
+        super().__init__(
+            recipe.rnd_coef,
+            obs_shape,
+            recipe.num_envs,
+            recipe.seed,
+            device,
+            recipe.rnd_proportion,
+            recipe.rnd_pool,
+        )
         with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
             torch.manual_seed(recipe.seed + 0x52E)
             self.value_head = nn.Linear(agent.embedding_width, 1).to(device)
@@ -266,4 +299,6 @@ def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: A
         return NoNovelty()
     if recipe.rnd_own_value:
         return OwnValueDistillation(recipe, obs_shape, agent, device)
-    return RandomDistillation(recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion)
+    return RandomDistillation(
+        recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion, recipe.rnd_pool
+    )

@@ -48,6 +48,7 @@ RECIPE_FLAGS = (
     "rnd_coef",
     "rnd_own_value",
     "rnd_proportion",
+    "rnd_pool",
 )
 
 #: Recipe presets (``--preset NAME``): the settings that differ from :class:`Recipe`'s defaults; flags given on
@@ -235,6 +236,14 @@ class Recipe:
     #: With `rnd_coef`: the share of each minibatch the bonus's predictor learns from (CleanRL's `update_proportion`,
     #: 0.25 there): a cheaper update, a slower-learning predictor. 1.0 (the default): all of it.
     rnd_proportion: float = 1.0
+    #: With `rnd_coef`: the bonus's networks read each frame with every `rnd_pool` × `rnd_pool` square of pixels
+    #: averaged into one (1, 2 or 4): at 2, a 21×21 frame in place of 42×42 and about a sixth of their work (the
+    #: bonus tells the top of the sky from the bottom, which a coarser frame still shows). 1 (the default): as it is.
+    rnd_pool: int = 1
+
+
+#: The values `rnd_pool` takes: powers of two, so that each pooled pixel, a mean of bytes, is exact in float32.
+RND_POOLS = (1, 2, 4)
 
 
 #: Settings added after run folders with resume states existed, with the value every older run had: a recipe's hash
@@ -247,6 +256,7 @@ LATER_SETTINGS: dict[str, Any] = {
     "ent_floor": 1.0,
     "rnd_own_value": False,
     "rnd_proportion": 1.0,
+    "rnd_pool": 1,
 }
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -332,6 +342,11 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("recon_coef", r.recon_coef, 0.0, 1000.0)
     number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
     number_in("rnd_proportion", r.rnd_proportion, 0.0, 1.0, low_open=True)
+    if type(r.rnd_pool) is not int or r.rnd_pool not in RND_POOLS:  # not a bool, nor 2.0 from a JSON file
+        raise ValueError(
+            f"invalid value {r.rnd_pool!r} for option `rnd_pool`: allowed {', '.join(map(str, RND_POOLS))} (the side "
+            "of the square of pixels the novelty bonus averages into one)"
+        )
     number_in("teacher_coef", r.teacher_coef, 0.0, 1000.0)
     number_in("teacher_fade", r.teacher_fade, 0.0, 1.0, low_open=True)
     if not isinstance(r.teacher, str):
@@ -357,7 +372,7 @@ def check_recipe(recipe: Recipe) -> None:
                 f"invalid value {getattr(r, name)!r} for option `{name}`: {what} is for CNN recipes (pixel "
                 "observations); allowed 0 here"
             )
-    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0)):
+    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1)):
         if getattr(r, name) != unset and r.rnd_coef <= 0:
             raise ValueError(
                 f"invalid value {getattr(r, name)!r} for option `{name}`: it is the novelty bonus's; allowed with "
