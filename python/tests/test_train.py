@@ -236,8 +236,8 @@ CANDIDATE_F05_SEEDS = (0, 102)
 CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: The nineteenth session's: RND with its own value head on the preset's 8 M schedule (docs/curves/pixels-candidates/
 #: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's and seed 2 the
-#: twenty-first's, each in one call), its seeds run so far and its flags.
-CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102)
+#: twenty-first's, seed 103 the twenty-second's, each in one call), its seeds run so far and its flags.
+CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
 
 
@@ -359,11 +359,11 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndown05-seed102", CANDIDATE_RNDOWN05),
-        # The twenty-first session's seed 103 of it, by the target's protocol, stopped by the session at 3.76 M of 8 M.
-        (103, "p43-rndown05-seed103", CANDIDATE_RNDOWN05),
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
+        # The twenty-second session's bonus on frames pooled 2×2 (to 2.39 M of 8 M, alone on both cores).
+        (102, "p43-rndpool2-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 2}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {"torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
