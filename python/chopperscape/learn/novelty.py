@@ -10,16 +10,16 @@ every other seed flies at the top, where every tank comes to it (`python/example
 docs/notes/pixels-speed-and-probes.md, fifteenth session). Entropy spreads a policy where it is; a novelty bonus
 pulls it toward the frames it has not seen, the ones at the other end of the sky.
 
-As CleanRL's `ppo_rnd_envpool.py` does, save what the 2-core pixel loop asks: the latest frame of each stack, each
-pixel standardised by running statistics and clipped to ±5 (with `rnd_pool` P, each P × P square of pixels averaged
-into one first: at P = 2 a quarter of the pixels, the networks' work cut about sixfold); the error (mean squared over
-the 128 outputs) divided by the running standard deviation of its discounted sum (γ 0.99, not cut at episode ends);
-the predictor trained on every minibatch. By default one value head: the bonus, times `rnd_coef`, is added to the
-step's scaled reward and cut at episode ends, so it also pays for surviving, wherever the chopper is. With
-`rnd_own_value` (:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a
-value head of its own on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the
-policy learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training
-only: neither network nor the bonus's value head is part of the policy, the saved model or its export.
+As CleanRL's `ppo_rnd_envpool.py` does, save what the 2-core pixel loop asks: the latest frame of each stack, each pixel
+standardised by running statistics and clipped to ±5 (with `rnd_pool` P, each P × P square of pixels averaged into one
+first: at P = 2 a quarter of the pixels, a sixth of the networks' arithmetic, about half of the bonus's time); the error
+(mean squared over the 128 outputs) divided by the running standard deviation of its discounted sum (γ 0.99, not cut at
+episode ends); the predictor trained on every minibatch. By default one value head: the bonus, times `rnd_coef`, is
+added to the step's scaled reward and cut at episode ends, so it also pays for surviving, wherever the chopper is. With
+`rnd_own_value` (:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a value
+head of its own on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the policy
+learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training only: neither
+network nor the bonus's value head is part of the policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
 calls `bonus(t, h, raw, valid)` at each rollout step (`h`, the embedding the policy acted on), `advantages(batch, buf,

@@ -237,8 +237,9 @@ class Recipe:
     #: 0.25 there): a cheaper update, a slower-learning predictor. 1.0 (the default): all of it.
     rnd_proportion: float = 1.0
     #: With `rnd_coef`: the bonus's networks read each frame with every `rnd_pool` × `rnd_pool` square of pixels
-    #: averaged into one (1, 2 or 4): at 2, a 21×21 frame in place of 42×42 and about a sixth of their work (the
-    #: bonus tells the top of the sky from the bottom, which a coarser frame still shows). 1 (the default): as it is.
+    #: averaged into one (1, 2 or 4): at 2, a 21×21 frame in place of 42×42, a sixth of their arithmetic and about
+    #: half of the bonus's time (it tells the top of the sky from the bottom, which a coarser frame still shows).
+    #: 1 (the default): as it is.
     rnd_pool: int = 1
 
 
