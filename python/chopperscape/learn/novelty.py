@@ -137,32 +137,32 @@ class RandomDistillation:
             latest = torch.nn.functional.avg_pool2d(latest.unsqueeze(1), self.pool).squeeze(1)
         return latest
 
-    def _input(self, x: torch.Tensor) -> torch.Tensor:
-        """`(N, 1, H / pool, W / pool)`: each stack's latest frame (:meth:`_latest`), standardised by the running
-        statistics and clipped to ±5."""
-        latest = self._latest(x)
+    def _input(self, latest: torch.Tensor) -> torch.Tensor:
+        """`(N, 1, H / pool, W / pool)`: the frames :meth:`_latest` gives, standardised by the running statistics and
+        clipped to ±5."""
         mean = torch.as_tensor(self.frames.mean, dtype=torch.float32, device=latest.device)
         std = torch.as_tensor(np.sqrt(self.frames.var + 1e-8), dtype=torch.float32, device=latest.device)
         return ((latest - mean) / std).clamp(-5.0, 5.0).unsqueeze(1)
 
-    def _error(self, x: torch.Tensor) -> torch.Tensor:
-        """Each frame's error: the predictor's output against the target's, squared, averaged over the outputs."""
-        seen = self._input(x)
+    def _frame_error(self, latest: torch.Tensor) -> torch.Tensor:
+        """Each frame's error (of the frames :meth:`_latest` gives): the predictor's output against the target's,
+        squared, averaged over the outputs."""
+        seen = self._input(latest)
         return ((self.predictor(seen) - self.target(seen)) ** 2).mean(-1)
+
+    def _error(self, x: torch.Tensor) -> torch.Tensor:
+        """Each stack's error (uint8, ``(N, H, W)`` or ``(N, H, W, k)``): :meth:`_frame_error` of its latest frame."""
+        return self._frame_error(self._latest(x))
 
     def scaled(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The unweighted bonus (float64) of each env's step that led to `raw` (the observations the step returned),
         0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
         any_valid = bool(valid.any())
-        x = torch.from_numpy(raw)
-        if any_valid:
-            if self.pool > 1:
-                self.frames.update(self._latest(x[torch.from_numpy(valid)]).double().numpy())
-            else:  # the frames as they are: the bytes as float64, as the runs before pooling existed
-                latest = raw if raw.ndim == 3 else raw[..., -1]
-                self.frames.update(latest[valid].astype(np.float64))
         with torch.inference_mode():
-            error = self._error(x.to(self.device)).double().cpu().numpy()
+            latest = self._latest(torch.from_numpy(raw).to(self.device))  # pooled once, for both
+            if any_valid:  # bytes (or means of 4 or 16) are exact in float32, so as float64 they are as they were
+                self.frames.update(latest[torch.from_numpy(valid).to(self.device)].double().cpu().numpy())
+            error = self._frame_error(latest).double().cpu().numpy()
         self.running = np.where(valid, self.running * GAMMA_INTRINSIC + error, self.running)
         if any_valid:
             self.errors.update(self.running[valid])
