@@ -43,6 +43,8 @@ from .rollout import Batch, Rollout
 GAMMA_INTRINSIC = 0.99
 #: The width of the target's output.
 OUTPUT_WIDTH = 128
+#: The most frames the networks read in one call when the bonus's errors are taken a rollout at a time.
+CHUNK = 2048
 
 
 class NoNovelty:
@@ -154,20 +156,35 @@ class RandomDistillation:
         """Each stack's error (uint8, ``(N, H, W)`` or ``(N, H, W, k)``): :meth:`_frame_error` of its latest frame."""
         return self._frame_error(self._latest(x))
 
-    def scaled(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """The unweighted bonus (float64) of each env's step that led to `raw` (the observations the step returned),
-        0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
-        any_valid = bool(valid.any())
+    def _seen(self, raw: np.ndarray, valid: np.ndarray) -> torch.Tensor:
+        """The networks' input for the observations `raw` a step returned (:meth:`_input`), the frame statistics first
+        updated with the valid ones."""
         with torch.inference_mode():
             latest = self._latest(torch.from_numpy(raw).to(self.device))  # pooled once, for both
-            if any_valid:  # bytes (or means of 4 or 16) are exact in float32, so as float64 they are as they were
+            if valid.any():  # bytes (or means of 4 or 16) are exact in float32, so as float64 they are as they were
                 self.frames.update(latest[torch.from_numpy(valid).to(self.device)].double().cpu().numpy())
-            error = self._frame_error(latest).double().cpu().numpy()
+            return self._input(latest)
+
+    def _errors(self, seen: torch.Tensor) -> np.ndarray:
+        """Each input's error (float64): the predictor's output against the target's, squared, averaged over the
+        outputs, in calls of at most :data:`CHUNK` frames."""
+        with torch.inference_mode():
+            out = [((self.predictor(c) - self.target(c)) ** 2).mean(-1) for c in seen.split(CHUNK)]
+            return torch.cat(out).double().cpu().numpy()
+
+    def _scale(self, error: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The unweighted bonus (float64) of one rollout step's envs from their errors, 0 on reset steps; the running
+        sums and the bonus's scale are updated with the valid ones."""
         self.running = np.where(valid, self.running * GAMMA_INTRINSIC + error, self.running)
-        if any_valid:
+        if valid.any():
             self.errors.update(self.running[valid])
             self.since = [self.since[0] + float(error[valid].sum()), self.since[1] + int(valid.sum())]
         return np.where(valid, error / math.sqrt(float(self.errors.var) + 1e-8), 0.0)
+
+    def scaled(self, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
+        """The unweighted bonus (float64) of each env's step that led to `raw` (the observations the step returned),
+        0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
+        return self._scale(self._errors(self._seen(raw, valid)), valid)
 
     def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward;
@@ -242,15 +259,33 @@ class OwnValueDistillation(RandomDistillation):
         self.rewards = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)
         self.values = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)  # the head's, at the rollout
         self.returns = torch.zeros(0, device=device)
+        h, w = obs_shape[0] // self.pool, obs_shape[1] // self.pool
+        self.seen = torch.zeros((recipe.num_steps, recipe.num_envs, 1, h, w), device=device)  # each step's input
+        self.valid = np.zeros((recipe.num_steps, recipe.num_envs), bool)
+        self.pending = 0  # the steps kept in `seen` whose bonus is not yet in `rewards`
 
     @torch.no_grad()
     def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
-        """Keeps rollout step `t`'s bonus as a reward of its own, and the bonus's value of the observation the policy
-        acted on (read from `h`, the embedding its forward pass gave: no second pass over the rollout); the game's
-        reward gets nothing added."""
+        """Keeps what rollout step `t`'s bonus needs: the networks' input from `raw` (:meth:`_seen`, the frame
+        statistics updated step by step) and `valid`, and the bonus's value of the observation the policy acted on
+        (read from `h`, the embedding its forward pass gave: no second pass over the rollout); the game's reward gets
+        nothing added. The bonus itself, a reward of its own, is taken for the whole rollout at once (:meth:`settle`):
+        the predictor does not change during a rollout, and one call over its frames costs less than a call a step."""
         self.values[t] = self.value_head(cast(torch.Tensor, h)).squeeze(-1)
-        self.rewards[t] = torch.from_numpy(self.scaled(raw, valid).astype(np.float32)).to(self.device)
+        self.seen[t], self.valid[t], self.pending = self._seen(raw, valid), valid, t + 1
         return np.zeros(len(valid), np.float32)
+
+    def settle(self) -> None:
+        """The bonus of each rollout step kept since the last call, as a reward of its own (`rewards`): the errors of
+        all their frames in one pass, then each step's scale in order, as step-by-step calls give it (the errors
+        equal to float32 rounding, which a call's batch size can move)."""
+        if self.pending:
+            seen = self.seen[: self.pending]
+            errors = self._errors(seen.reshape(-1, *seen.shape[2:])).reshape(self.pending, -1)
+            for t in range(self.pending):
+                bonus = self._scale(errors[t], self.valid[t]).astype(np.float32)
+                self.rewards[t] = torch.from_numpy(bonus).to(self.device)
+            self.pending = 0
 
     @torch.no_grad()
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
@@ -258,6 +293,7 @@ class OwnValueDistillation(RandomDistillation):
         steps with γ 0.99 and the recipe's λ, bootstrapped from `next_obs`, not cut at episode ends (a reset step
         carries nothing: the step that ended an episode bootstraps from the next episode's first). The bonus's
         returns, the value head's targets, are kept for :meth:`loss`."""
+        self.settle()
         t_len, n = self.rewards.shape
         values = self.values  # the head's at each step, stored by `bonus` from the rollout's own pass
         next_value = self.value_head(self.agent.heads(next_obs)[2]).squeeze(-1)
