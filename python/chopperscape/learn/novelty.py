@@ -18,7 +18,8 @@ episode ends); the predictor trained on every minibatch. By default one value he
 added to the step's scaled reward and cut at episode ends, so it also pays for surviving, wherever the chopper is. With
 `rnd_own_value` (:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a value
 head of its own on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the policy
-learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5). Training only: neither
+learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5); its errors are taken
+for the whole rollout in one pass once it ends (:meth:`OwnValueDistillation.settle`). Training only: neither
 network nor the bonus's value head is part of the policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
