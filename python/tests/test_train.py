@@ -239,6 +239,10 @@ CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: twenty-first's, seed 103 the twenty-second's, each in one call), its seeds run so far and its flags.
 CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
+#: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
+#: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call).
+CANDIDATE_RNDPOOL2_SEEDS = (2, 102)
+CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 
 
 @functools.cache
@@ -268,6 +272,7 @@ def _target_set(seed: int) -> str:
         ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS),
         ("pixels-candidates/ent02f05-12m", CANDIDATE_F05_SEEDS),
         ("pixels-candidates/rndown05", CANDIDATE_RNDOWN05_SEEDS),
+        ("pixels-candidates/rndpool2", CANDIDATE_RNDPOOL2_SEEDS),
     ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
@@ -362,8 +367,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
-        # The twenty-second session's bonus on frames pooled 2×2 (to 2.39 M of 8 M, alone on both cores).
-        (102, "p43-rndpool2-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 2}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {"torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
@@ -383,6 +386,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         *(
             (s, f"../pixels-candidates/rndown05/{_target_set(s)}/seed-{s}", CANDIDATE_RNDOWN05)
             for s in CANDIDATE_RNDOWN05_SEEDS
+        ),
+        # The twenty-third session's: that bonus on frames pooled 2×2 (`-- --rnd-coef 0.5 --rnd-own-value --rnd-pool
+        # 2`), collected apart.
+        *(
+            (s, f"../pixels-candidates/rndpool2/{_target_set(s)}/seed-{s}", CANDIDATE_RNDPOOL2)
+            for s in CANDIDATE_RNDPOOL2_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
