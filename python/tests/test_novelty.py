@@ -193,7 +193,7 @@ def test_its_own_value_keeps_the_bonus_apart_from_the_games_reward():
     assert np.allclose(one_head.bonus(5, None, _frames(4, 3), valid), 0.5 * own.rewards[5].numpy())
 
 
-def test_its_own_bonus_taken_a_rollout_at_once_is_the_step_by_step_bonus():
+def test_its_own_bonus_taken_a_rollout_at_once_is_the_step_by_step_bonus(monkeypatch):
     """The errors of a rollout's frames in one pass (in calls of `CHUNK` frames), each step's scale in order: the
     plain bonus's numbers step by step (to float32 rounding), its frame statistics, running sums and scale the same;
     a second rollout goes on from the first's."""
@@ -206,23 +206,20 @@ def test_its_own_bonus_taken_a_rollout_at_once_is_the_step_by_step_bonus():
     plain = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=recipe.seed, device="cpu")
     rng = np.random.default_rng(7)
     h = torch.zeros(4, 256)
-    chunk, novelty.CHUNK = novelty.CHUNK, 5  # more than one call a rollout
-    try:
-        for rollout in range(2):
-            steps = []
-            for t in range(6):
-                raw = rng.integers(0, 256, (4, 16, 16, 2), dtype=np.uint8)
-                valid = rng.random(4) < 0.8
-                steps.append(plain.scaled(raw, valid))
-                own.bonus(t, h, raw, valid)
-            assert own.pending == 6 and (rollout or not own.rewards.any())
-            own.settle()
-            assert own.pending == 0
-            assert np.allclose(own.rewards.numpy(), np.array(steps, np.float32), rtol=1e-5, atol=1e-7)
-            assert np.array_equal(own.frames.mean, plain.frames.mean) and np.allclose(own.running, plain.running)
-            assert np.isclose(own.errors.var, plain.errors.var) and own.since[1] == plain.since[1]
-    finally:
-        novelty.CHUNK = chunk
+    monkeypatch.setattr(novelty, "CHUNK", 5)  # more than one call a rollout
+    for rollout in range(2):
+        steps = []
+        for t in range(6):
+            raw = rng.integers(0, 256, (4, 16, 16, 2), dtype=np.uint8)
+            valid = rng.random(4) < 0.8
+            steps.append(plain.scaled(raw, valid))
+            own.bonus(t, h, raw, valid)
+        assert own.pending == 6 and (rollout or not own.rewards.any())
+        own.settle()
+        assert own.pending == 0
+        assert np.allclose(own.rewards.numpy(), np.array(steps, np.float32), rtol=1e-5, atol=1e-7)
+        assert np.array_equal(own.frames.mean, plain.frames.mean) and np.allclose(own.running, plain.running)
+        assert np.isclose(own.errors.var, plain.errors.var) and own.since[1] == plain.since[1]
 
 
 def test_its_own_advantage_runs_across_episode_ends_and_joins_the_games():
