@@ -150,7 +150,10 @@ class RandomDistillation:
     def _frame_error(self, latest: torch.Tensor) -> torch.Tensor:
         """Each frame's error (of the frames :meth:`_latest` gives): the predictor's output against the target's,
         squared, averaged over the outputs."""
-        seen = self._input(latest)
+        return self._distance(self._input(latest))
+
+    def _distance(self, seen: torch.Tensor) -> torch.Tensor:
+        """Each input's error: the predictor's output against the target's, squared, averaged over the outputs."""
         return ((self.predictor(seen) - self.target(seen)) ** 2).mean(-1)
 
     def _error(self, x: torch.Tensor) -> torch.Tensor:
@@ -167,11 +170,9 @@ class RandomDistillation:
             return self._input(latest)
 
     def _errors(self, seen: torch.Tensor) -> np.ndarray:
-        """Each input's error (float64): the predictor's output against the target's, squared, averaged over the
-        outputs, in calls of at most :data:`CHUNK` frames."""
+        """Each input's error (:meth:`_distance`, as float64), in calls of at most :data:`CHUNK` frames."""
         with torch.inference_mode():
-            out = [((self.predictor(c) - self.target(c)) ** 2).mean(-1) for c in seen.split(CHUNK)]
-            return torch.cat(out).double().cpu().numpy()
+            return torch.cat([self._distance(c) for c in seen.split(CHUNK)]).double().cpu().numpy()
 
     def _scale(self, error: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The unweighted bonus (float64) of one rollout step's envs from their errors, 0 on reset steps; the running
@@ -260,8 +261,8 @@ class OwnValueDistillation(RandomDistillation):
         self.rewards = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)
         self.values = torch.zeros((recipe.num_steps, recipe.num_envs), device=device)  # the head's, at the rollout
         self.returns = torch.zeros(0, device=device)
-        h, w = obs_shape[0] // self.pool, obs_shape[1] // self.pool
-        self.seen = torch.zeros((recipe.num_steps, recipe.num_envs, 1, h, w), device=device)  # each step's input
+        frame = self.frames.mean.shape  # the pooled frame's (H, W)
+        self.seen = torch.zeros((recipe.num_steps, recipe.num_envs, 1, *frame), device=device)  # each step's input
         self.valid = np.zeros((recipe.num_steps, recipe.num_envs), bool)
         self.pending = 0  # the steps kept in `seen` whose bonus is not yet in `rewards`
 
