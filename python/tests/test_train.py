@@ -211,9 +211,13 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
         assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
 
 
+#: What a run of the preset before the twenty-fourth session adds to the preset's flags: no novelty bonus (the
+#: preset's `NOVELTY` since). The flags below are those that give each run's recipe on today's preset.
+BEFORE_NOVELTY = {"rnd_coef": 0.0, "rnd_own_value": False, "rnd_pool": 1}
 #: The earlier pixel preset (until the ninth session): the plain small CNN, 2 epochs of 4 minibatches at 1e-3 over
 #: 10 M decisions (docs/learning.md gives its flags).
 EARLIER_PIXELS = {
+    **BEFORE_NOVELTY,
     "network": "small",
     "update_epochs": 2,
     "num_minibatches": 4,
@@ -229,7 +233,13 @@ TARGET_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 
 #: The candidate recipe's seeds run so far (docs/curves/pixels-candidates/ent02-12m/target.csv), and its flags.
 CANDIDATE_SEEDS = (0, 3, 102)
-CANDIDATE_ENT02_12M = {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000, "ent_coef": 0.02}
+CANDIDATE_ENT02_12M = {
+    **BEFORE_NOVELTY,
+    "torch_compile": True,
+    "torch_threads": 2,
+    "total_steps": 12_000_000,
+    "ent_coef": 0.02,
+}
 #: The seventeenth session's candidate, that entropy falling to half of itself (docs/curves/pixels-candidates/
 #: ent02f05-12m/target.csv), its seeds run so far and its flags.
 CANDIDATE_F05_SEEDS = (0, 102)
@@ -238,10 +248,11 @@ CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's and seed 2 the
 #: twenty-first's, seed 103 the twenty-second's, each in one call), its seeds run so far and its flags.
 CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
-CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True}
+CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 1}
 #: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
-#: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call).
-CANDIDATE_RNDPOOL2_SEEDS = (2, 102)
+#: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call, seed 0 begun
+#: there and resumed in the twenty-fourth). Since the twenty-fourth session these flags are the preset's own.
+CANDIDATE_RNDPOOL2_SEEDS = (0, 2, 102)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 
 
@@ -349,30 +360,36 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # into docs/curves/pixels-seeds by collect_target.py), and the probes of the value loss at weight 1.0 that
         # made it the preset, one thread each.
         *(
-            (s, f"../pixels-seeds/{_target_set(s)}/seed-{s}", {"torch_compile": True, "torch_threads": 2})
+            (
+                s,
+                f"../pixels-seeds/{_target_set(s)}/seed-{s}",
+                {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2},
+            )
             for s in TARGET_SEEDS
         ),
-        *((s, f"p43-vf1-seed{s}", {"torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
+        *((s, f"p43-vf1-seed{s}", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 1}) for s in (0, 3)),
         # The fourteenth session's longer schedule, by the target's protocol (`target43.sh 102 RUNS -- --steps ...`).
         *(
-            (s, f"p43-steps12m-seed{s}", {"torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000})
+            (
+                s,
+                f"p43-steps12m-seed{s}",
+                {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2, "total_steps": 12_000_000},
+            )
             for s in (2, 102, 103)
         ),
         # Probes on the stalled seed 102 (`probe43.sh NAME UNTIL RUNS 102 -- FLAGS`, one thread): entropy 0.02 (the
         # thirteenth and fifteenth sessions) and the exploration bonus `--rnd-coef 0.5` (the fifteenth).
-        (102, "p43-ent02-seed102", {"torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
-        (102, "p43-rnd05-seed102", {"torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
+        (102, "p43-ent02-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 1, "ent_coef": 0.02}),
+        (102, "p43-rnd05-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 1, "rnd_coef": 0.5}),
         # The seventeenth session's RND with its own value head (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndown05-seed102", CANDIDATE_RNDOWN05),
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
-        # The pooled candidate's seed 0 by the target's protocol, cut by the twenty-third session's end (first rows).
-        (0, "p43-rndpool2-seed0", CANDIDATE_RNDPOOL2),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
-        (102, "p43-zen3-seed102", {"torch_compile": True, "torch_threads": 2}),
+        (102, "p43-zen3-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
         # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores), collected apart.
         *(
@@ -399,7 +416,11 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
-            (s, f"p43-target-stem8m-seed{s}", {"torch_compile": True, "torch_threads": 2, "vf_coef": 0.5})
+            (
+                s,
+                f"p43-target-stem8m-seed{s}",
+                {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2, "vf_coef": 0.5},
+            )
             for s in range(5)
         ),
         # The earlier preset's runs (issue 28's three seeds), with the flags that give its learning settings back.
@@ -424,6 +445,24 @@ def test_the_pixel_preset_is_the_recipe_the_targets_ran(seed, name, flags):
     preset = dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **flags}, seed=seed))
     assert ran == preset
     assert (ran["teacher"], ran["aux_coef"], ran["recon_coef"]) == ("", 0.0, 0.0)
+
+
+def test_the_pixel_preset_is_the_pooled_novelty_candidate():
+    """Since the twenty-fourth session `--preset pixels` is the candidate its target seeds ran as flags (RND 0.5 with
+    its own value head on frames pooled 2×2): those flags add nothing to the preset but the speed settings, so the
+    seeds run with them and those run with the preset alone have one recipe."""
+    import dataclasses
+
+    from chopperscape.learn.presets import NOVELTY
+    from chopperscape.learn.recipe import PRESETS, Recipe
+
+    speed = {"torch_compile": True, "torch_threads": 2}
+    assert dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **CANDIDATE_RNDPOOL2})) == dataclasses.asdict(
+        Recipe(**{**PRESETS["pixels"], **speed})
+    )
+    assert {k: PRESETS["pixels"][k] for k in NOVELTY} == {"rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 2}
+    # The GPU preset keeps what it was measured with: no bonus.
+    assert Recipe(**PRESETS["pixels-large"]).rnd_coef == 0.0
 
 
 GPU_FLAGS = {"device": "cuda", "torch_compile": True, "env_threads": 12, "torch_threads": 4}

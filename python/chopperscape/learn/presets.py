@@ -20,7 +20,9 @@ from typing import Any
 #: (docs/notes/pixels-speed-and-probes.md); until the ninth session the preset was the teacher-free probes' p3 (the
 #: plain small CNN, 2 epochs of 4 minibatches at 1e-3 over 10 M; docs/notes/teacher-free-probes-second-round.md),
 #: whose runs ``--network small --update-epochs 2 --num-minibatches 4 --learning-rate 1e-3 --steps 10000000``
-#: reproduce. 84×84 with λ 0.95 did not train from frames alone here.
+#: reproduce. 84×84 with λ 0.95 did not train from frames alone here. Since the twenty-fourth session it also
+#: explores by Random Network Distillation (:mod:`chopperscape.learn.novelty`; :data:`NOVELTY`): without it, one
+#: seed in five stalled low in the sky and stayed there (seeds 2 and 102 of issue 43's target, 3,838 and 2,407).
 #: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
 #: features teacher (`--teacher`), the faster, privileged route.
 #: What the two pixel presets share: a small CNN on grayscale frames, 4 stacked at frame skip 4, γ 0.998 a decision.
@@ -53,6 +55,17 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_rate": 2.5e-4,
     },
 }
+#: The exploration bonus `pixels` learns with since the twenty-fourth session: RND as the paper has it (a predictor
+#: chasing a fixed random network, its error a reward with a value head of its own, weighed 0.5 against the game's),
+#: the two networks reading each frame pooled 2×2 (21×21), which costs about 1.2 times the preset's time without it
+#: (`python/bench_train.py --case pixels`). Chosen by issue 43's probes and target runs
+#: (docs/curves/pixels-candidates/rndpool2/: held out at 8 M, seed 2 7,663 and seed 102 9,158 where the preset
+#: without it had 3,838 and 2,407; docs/notes/pixels-speed-and-probes.md).
+NOVELTY: dict[str, Any] = {"rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 2}
+#: What `pixels` was from the twelfth session to the twenty-third, which `pixels-large` keeps (its GPU figures were
+#: measured so).
+_PIXELS_WITHOUT_NOVELTY = dict(PRESETS["pixels"])
+PRESETS["pixels"] = {**PRESETS["pixels"], **NOVELTY}
 #: Learning in minutes (`--preset fast`; docs/notes/fast-preset-probes.md): the features recipe at frame skip
 #: 4 (env steps count decisions; γ = 0.998 per decision is 0.9995 per frame) for 3 M decisions, with a larger batch
 #: per Python step (128 envs × 128 steps), 2 epochs of 4 minibatches (a quarter of the recipe's gradient steps per
@@ -70,7 +83,8 @@ PRESETS["fast"] = {
     "learning_rate": 1e-3,
     "total_steps": 3_000_000,
 }
-#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`): 4× the envs, so that each
+#: The pixel recipe with a batch sized for a GPU (`--preset pixels-large --device cuda`), without the novelty bonus
+#: (not measured on a GPU yet; `--rnd-coef 0.5 --rnd-own-value --rnd-pool 2` adds it): 4× the envs, so that each
 #: forward pass and each of the 8 minibatches (4,096 samples) keeps a GPU busy; the same samples per update per env,
 #: over a 28 M-decision schedule. Measured on an H200 with 16 cores (issue 43; docs/curves/pixels-probes/gpu43-*):
 #: on the 8 M schedule of `pixels` (twelfth session) 67,040 decisions a second with ``--env-threads 12
@@ -78,7 +92,7 @@ PRESETS["fast"] = {
 #: (fourteenth session, 855 updates) 77,000–80,000 decisions a second, the schedule in 6 minutes, a training return
 #: of 7,000 (over the last 1 M) after 2.3–3.7 minutes, and held out 10,656 (seed 0) and 19,065 (seed 1, at 23 M).
 PRESETS["pixels-large"] = {
-    **PRESETS["pixels"],
+    **_PIXELS_WITHOUT_NOVELTY,
     "num_envs": 256,
     "num_minibatches": 8,
     "env_threads": 2,
