@@ -347,7 +347,9 @@ TRAINED_ROWS = {
     "sb3-ppo": ["-m", "chopperscape.integrations.sb3_train", "ppo"],
     "sb3-dqn": ["-m", "chopperscape.integrations.sb3_train", "dqn"],
     "rllib-ppo": ["-m", "chopperscape.integrations.rllib.ppo"],
-    "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels"],
+    "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels", "--mode"],
+    # The preset until the ninth session, which the first pixel rows ran (today's preset with these flags).
+    "pixels-p3": ["-m", "chopperscape.learn.train", "--preset", "pixels", "--network", "small", "--update-epochs", "2"],
 }
 
 
@@ -398,6 +400,25 @@ def test_bench_row_trains_each_seed_on_the_mode_and_evaluates_it_under_the_rows_
         assert results.check_name(ev[ev.index("--name") + 1]) == rows.ROWS[row].name()
 
 
+@pytest.mark.parametrize("mode", ["sticky-v0", "full-v0"])
+def test_the_earlier_pixel_rows_command_gives_back_the_recipe_their_files_hold(mode, tmp_path):
+    """The first pixel rows were trained as `--preset pixels` before the preset changed (ninth and twenty-fourth
+    sessions); row `pixels-p3` keeps them, and its training command, parsed as `train` parses it, is the recipe
+    each committed file records, field for field."""
+    import dataclasses
+
+    from chopperscape.bench import rows
+    from chopperscape.learn import flags
+    from chopperscape.learn.recipe import LATER_SETTINGS
+
+    row = rows.ROWS["pixels-p3"]
+    for seed in range(10):
+        command = rows.train_command(row, mode, seed, row.steps, tmp_path / "run", "py", "rpy")
+        _, recipe = flags.parse(command[3:])
+        held = json.loads((RESULTS / f"{mode}.pixels-p3.seed{seed}.json").read_text())["policy"]["recipe"]
+        assert dataclasses.asdict(recipe) == {**LATER_SETTINGS, **held}, f"{mode} seed {seed}"
+
+
 def test_bench_row_skips_finished_seeds_and_refuses_bad_input_in_one_line(tmp_path):
     (tmp_path / "sticky-v0.fast.seed1.json").write_text("{}")
     done = _row("fast", "--mode", "sticky-v0", "--seeds", "1-2", "--runs", "runs", "--dry-run", results=tmp_path)
@@ -406,7 +427,7 @@ def test_bench_row_skips_finished_seeds_and_refuses_bad_input_in_one_line(tmp_pa
     refused = [
         (
             ["ppo", "--mode", "sticky-v0"],
-            "unknown row 'ppo': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels",
+            "unknown row 'ppo': allowed fast, features, sb3-ppo, sb3-dqn, rllib-ppo, pixels, pixels-p3",
         ),
         (["fast", "--mode", "v0"], "--mode 'v0' is not a mode of row fast: allowed sticky-v0, full-v0"),
         (["fast", "--mode", "full-v0", "--seeds", "*"], "--seeds '*': allowed numbers and ranges such as 0-9 or 0,3,5"),

@@ -56,8 +56,18 @@ def _fast() -> Any:
     return Recipe(**{k: v for k, v in PRESETS["fast"].items() if k != "total_steps"})
 
 
-def _learn(preset: str | None) -> Callable[[], dict[str, Any]]:
-    return lambda: {"preset": preset}
+def _learn(preset: str | None, flags: tuple[str, ...] = ()) -> Callable[[], dict[str, Any]]:
+    """The recipe trainer's settings: a preset (None: the recipe's defaults) and flags after it."""
+    return lambda: {"preset": preset, "flags": list(flags)}
+
+
+#: The pixel preset until the ninth session (issue 28's p3: the plain small CNN, 2 epochs of 4 minibatches at lr 1e-3,
+#: the value loss at 0.5, no novelty bonus) as flags over today's `--preset pixels`: the leaderboard's first pixel
+#: rows were trained with it, under the key `pixels` and the name that row `pixels-p3` keeps.
+PIXELS_P3_FLAGS = (
+    "--network", "small", "--update-epochs", "2", "--num-minibatches", "4", "--learning-rate", "1e-3",
+    "--vf-coef", "0.5", "--rnd-coef", "0", "--no-rnd-own-value", "--rnd-pool", "1",
+)  # fmt: skip
 
 
 def _sb3_ppo() -> dict[str, Any]:
@@ -123,8 +133,10 @@ ROWS: dict[str, Row] = {
             "training seed S: game S (one env)"),
         Row("rllib-ppo", "RLlib PPO, the fast preset's settings, {budget} decisions", "rllib-ppo", _rllib_ppo,
             3_000_000, "model.onnx", "training seed S: runner 1's games (S + 1) · 2**20 + i, i = 0 … 127"),
-        Row("pixels", "pixel preset: PPO on 42x42 frames alone, {budget} decisions", "learn", _learn("pixels"),
-            1_000_000, "model.pt", _RECIPE_SEEDS),
+        Row("pixels", "pixel preset with RND: PPO on 42x42 frames alone, {budget} decisions", "learn",
+            _learn("pixels"), 1_000_000, "model.pt", _RECIPE_SEEDS),
+        Row("pixels-p3", "pixel preset: PPO on 42x42 frames alone, {budget} decisions", "learn",
+            _learn("pixels", PIXELS_P3_FLAGS), 1_000_000, "model.pt", _RECIPE_SEEDS),
     )
 }  # fmt: skip
 
@@ -189,7 +201,7 @@ def train_command(row: Row, mode: str, seed: int, steps: int, out: Path, py: str
     if row.trainer == "learn":
         if (out / "resume.pt").is_file():
             return [py, "-m", "chopperscape.learn.train", "--resume", str(out)]
-        preset = [] if s["preset"] is None else ["--preset", s["preset"]]
+        preset = ([] if s["preset"] is None else ["--preset", s["preset"]]) + s["flags"]
         args = ["--mode", mode, "--steps", str(steps), "--seed", str(seed), "--out", str(out), "--force"]
         return [py, "-m", "chopperscape.learn.train", *preset, *args]
     if row.trainer in ("sb3-ppo", "sb3-dqn"):
