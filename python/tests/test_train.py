@@ -13,6 +13,9 @@ import numpy as np
 import pytest
 from conftest import needs_torch, progress_rows
 
+from chopperscape.learn.presets import NOVELTY
+from chopperscape.learn.recipe import LATER_SETTINGS
+
 
 @needs_torch
 def test_recipe_trains_saves_and_evaluates(tmp_path, capsys):
@@ -213,7 +216,7 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
 
 #: What a run of the preset before the twenty-fourth session adds to the preset's flags: no novelty bonus (the
 #: preset's `NOVELTY` since). The flags below are those that give each run's recipe on today's preset.
-BEFORE_NOVELTY = {"rnd_coef": 0.0, "rnd_own_value": False, "rnd_pool": 1}
+BEFORE_NOVELTY = {k: LATER_SETTINGS[k] for k in NOVELTY}
 #: The earlier pixel preset (until the ninth session): the plain small CNN, 2 epochs of 4 minibatches at 1e-3 over
 #: 10 M decisions (docs/learning.md gives its flags).
 EARLIER_PIXELS = {
@@ -455,7 +458,6 @@ def test_the_pixel_preset_is_the_pooled_novelty_candidate():
     seeds run with them and those run with the preset alone have one recipe."""
     import dataclasses
 
-    from chopperscape.learn.presets import NOVELTY
     from chopperscape.learn.recipe import PRESETS, Recipe
 
     speed = {"torch_compile": True, "torch_threads": 2}

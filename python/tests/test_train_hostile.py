@@ -15,6 +15,7 @@ import pytest
 
 torch = pytest.importorskip("torch", reason="torch is not installed (scripts/test-python.sh installs it)")
 from chopperscape.learn import networks, train  # noqa: E402
+from chopperscape.learn.presets import NOVELTY  # noqa: E402
 from chopperscape.learn.recipe import Recipe  # noqa: E402
 
 #: A recipe that runs an update in a fraction of a second.
@@ -178,7 +179,7 @@ def test_the_large_pixel_preset_is_the_pixel_recipe_with_a_bigger_batch(tmp_path
     assert (small.total_steps, large.total_steps) == (8_000_000, 28_000_000)
     # Since the twenty-fourth session the pixel preset explores with RND (presets.NOVELTY); the GPU preset keeps what
     # its figures were measured with, no bonus.
-    batch = ("num_envs", "num_minibatches", "env_threads", "total_steps", "rnd_coef", "rnd_own_value", "rnd_pool")
+    batch = ("num_envs", "num_minibatches", "env_threads", "total_steps", *NOVELTY)
     assert (small.rnd_coef, large.rnd_coef, large.rnd_own_value, large.rnd_pool) == (0.5, 0.0, False, 1)
     same = {k: v for k, v in vars(small).items() if k not in batch}
     assert same == {k: v for k, v in vars(large).items() if k in same}

@@ -34,6 +34,13 @@ _FRAMES: dict[str, Any] = {
     "gamma": 0.998,
     "ent_coef": 0.01,
 }
+#: The exploration bonus `pixels` learns with since the twenty-fourth session: RND as the paper has it (a predictor
+#: chasing a fixed random network, its error a reward with a value head of its own, weighed 0.5 against the game's),
+#: the two networks reading each frame pooled 2×2 (21×21), which costs about 1.2 times the preset's time without it
+#: (`python/bench_train.py --case pixels`). Chosen by issue 43's probes and target runs
+#: (docs/curves/pixels-candidates/rndpool2/: held out at 8 M, seed 2 7,663 and seed 102 9,158 where the preset
+#: without it had 3,838 and 2,407; docs/notes/pixels-speed-and-probes.md).
+NOVELTY: dict[str, Any] = {"rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 2}
 PRESETS: dict[str, dict[str, Any]] = {
     "features": {},
     "pixels": {
@@ -47,6 +54,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_rate": 2e-3,
         "vf_coef": 1.0,
         "total_steps": 8_000_000,
+        **NOVELTY,
     },
     "pixels-teacher": {
         **_FRAMES,
@@ -55,17 +63,6 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_rate": 2.5e-4,
     },
 }
-#: The exploration bonus `pixels` learns with since the twenty-fourth session: RND as the paper has it (a predictor
-#: chasing a fixed random network, its error a reward with a value head of its own, weighed 0.5 against the game's),
-#: the two networks reading each frame pooled 2×2 (21×21), which costs about 1.2 times the preset's time without it
-#: (`python/bench_train.py --case pixels`). Chosen by issue 43's probes and target runs
-#: (docs/curves/pixels-candidates/rndpool2/: held out at 8 M, seed 2 7,663 and seed 102 9,158 where the preset
-#: without it had 3,838 and 2,407; docs/notes/pixels-speed-and-probes.md).
-NOVELTY: dict[str, Any] = {"rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 2}
-#: What `pixels` was from the twelfth session to the twenty-third, which `pixels-large` keeps (its GPU figures were
-#: measured so).
-_PIXELS_WITHOUT_NOVELTY = dict(PRESETS["pixels"])
-PRESETS["pixels"] = {**PRESETS["pixels"], **NOVELTY}
 #: Learning in minutes (`--preset fast`; docs/notes/fast-preset-probes.md): the features recipe at frame skip
 #: 4 (env steps count decisions; γ = 0.998 per decision is 0.9995 per frame) for 3 M decisions, with a larger batch
 #: per Python step (128 envs × 128 steps), 2 epochs of 4 minibatches (a quarter of the recipe's gradient steps per
@@ -92,7 +89,7 @@ PRESETS["fast"] = {
 #: (fourteenth session, 855 updates) 77,000–80,000 decisions a second, the schedule in 6 minutes, a training return
 #: of 7,000 (over the last 1 M) after 2.3–3.7 minutes, and held out 10,656 (seed 0) and 19,065 (seed 1, at 23 M).
 PRESETS["pixels-large"] = {
-    **_PIXELS_WITHOUT_NOVELTY,
+    **{k: v for k, v in PRESETS["pixels"].items() if k not in NOVELTY},
     "num_envs": 256,
     "num_minibatches": 8,
     "env_threads": 2,
