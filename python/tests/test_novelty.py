@@ -318,3 +318,69 @@ def test_its_predictor_learns_from_the_given_share_of_each_minibatch(tmp_path):
         with pytest.raises(ValueError, match=r"`rnd_proportion`"):
             train.train(_recipe(rnd_coef=0.5, rnd_proportion=bad), tmp_path / "b")
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_its_weight_falls_to_its_floor_over_the_schedule():
+    """`rnd_floor`: the weight falls linearly over the step budget to the floor's share of `rnd_coef`, as the
+    entropy's does; the default floor keeps the weight exactly, so the runs before it train bit for bit as they did.
+    The part takes the weight the loop schedules: the one-head bonus and the own value's joined advantage scale with
+    it."""
+    import torch
+
+    from chopperscape.learn.novelty import RandomDistillation, novelty_of, novelty_weight
+    from chopperscape.learn.recipe import Recipe, check_recipe
+    from chopperscape.learn.rollout import Rollout, advantages
+
+    assert [novelty_weight(0.5, 1.0, t, 1000) for t in (0, 500, 1000, 2000)] == [0.5] * 4
+    assert [novelty_weight(0.5, 0.0, t, 1000) for t in (0, 500, 1000, 2000)] == pytest.approx([0.5, 0.25, 0.0, 0.0])
+    assert novelty_weight(0.5, 0.2, 500, 1000) == pytest.approx(0.3)
+    a = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu", floor=0.0, total_steps=1000)
+    b = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu")
+    valid = np.ones(4, bool)
+    a.schedule(750)
+    assert a.weight == pytest.approx(0.125)
+    assert np.allclose(a.bonus(0, None, _frames(4, 6), valid), 0.25 * b.bonus(0, None, _frames(4, 6), valid))
+    a.schedule(1000)
+    assert not a.bonus(1, None, _frames(4, 9), valid).any()
+
+    recipe, agent, own = _own(rnd_floor=0.25)
+    assert own.floor == 0.25 and own.total_steps == recipe.total_steps
+    own.schedule(recipe.total_steps)
+    assert own.weight == pytest.approx(0.125)
+    constant = novelty_of(replace(recipe, rnd_floor=1.0), (16, 16, 2), "cpu", agent)  # the same agent and networks
+    for part in (own, constant):  # the same rollout for both: one step of new frames, valid
+        part.bonus(0, torch.zeros(4, 256), _frames(4, 3), valid)
+    buf = Rollout(recipe.num_steps, 4, (16, 16, 2), torch.uint8, "cpu")
+    for t in range(recipe.num_steps):
+        zeros = torch.zeros(4)
+        buf.store(t, torch.from_numpy(_frames(4, t % 13)), zeros.long(), zeros, zeros, valid)
+        buf.outcome(t, np.ones(4, np.float32), np.zeros(4, bool))
+    next_obs = torch.from_numpy(_frames(4, 12))
+    game = advantages(buf, agent, next_obs, 0.998, 0.95)
+    low, full = own.advantages(game, buf, next_obs), constant.advantages(game, buf, next_obs)
+    assert not torch.equal(full.advantages, game.advantages)
+    assert torch.allclose(low.advantages - game.advantages, 0.25 * (full.advantages - game.advantages), atol=1e-6)
+
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match=r"`rnd_floor`"):
+            check_recipe(Recipe(obs_type="grayscale", network="small", rnd_coef=0.5, rnd_floor=bad))
+    with pytest.raises(ValueError, match=r"`rnd_floor`: it is the novelty bonus's; allowed with rnd_coef > 0"):
+        check_recipe(Recipe(obs_type="grayscale", network="small", rnd_floor=0.5))
+
+
+def test_a_run_with_a_falling_weight_parts_from_the_constant_one_after_its_first_update(tmp_path):
+    """The loop schedules the weight before each rollout: the first update (at 0 env steps) is the constant
+    weight's, row for row, the later ones are not; the recipe file keeps the floor."""
+    import csv
+
+    from chopperscape.learn import train
+
+    def rows(name, **kw):
+        train.train(_recipe(rnd_coef=0.5, rnd_own_value=True, **kw), tmp_path / name)
+        with open(tmp_path / name / "progress.csv", newline="") as f:
+            return [{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(f)]
+
+    constant, falling = rows("constant"), rows("falling", rnd_floor=0.0)
+    assert len(constant) == len(falling) == 6
+    assert constant[0] == falling[0] and constant[1:] != falling[1:]
+    assert json.loads((tmp_path / "falling" / "recipe.json").read_text())["rnd_floor"] == 0.0

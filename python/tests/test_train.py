@@ -254,8 +254,9 @@ CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 1}
 #: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
 #: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call, seed 0 begun
-#: there and resumed in the twenty-fourth). Since the twenty-fourth session these flags are the preset's own.
-CANDIDATE_RNDPOOL2_SEEDS = (0, 2, 3, 102)
+#: there and resumed in the twenty-fourth, seed 3 begun in the twenty-fourth and resumed in the twenty-fifth, seed 1 the
+#: twenty-fifth's in one call). Since the twenty-fourth session these flags are the preset's own.
+CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 102)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 
 

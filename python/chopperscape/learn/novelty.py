@@ -19,12 +19,14 @@ added to the step's scaled reward and cut at episode ends, so it also pays for s
 `rnd_own_value` (:class:`OwnValueDistillation`), the paper's two heads: the bonus is a reward of its own with a value
 head of its own on the policy's trunk, its return not cut at episode ends (γ 0.99, the recipe's λ), and the policy
 learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5); its errors are taken
-for the whole rollout in one pass once it ends (:meth:`OwnValueDistillation.settle`). Training only: neither
-network nor the bonus's value head is part of the policy, the saved model or its export.
+for the whole rollout in one pass once it ends (:meth:`OwnValueDistillation.settle`). With `rnd_floor` F below 1
+the weight falls linearly over the step budget to F × `rnd_coef` (as `ent_floor` does the entropy's): a search early,
+the game's return alone to learn from late. Training only: neither network nor the bonus's value head is part of the
+policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
-calls `bonus(t, h, raw, valid)` at each rollout step (`h`, the embedding the policy acted on), `advantages(batch, buf,
-next_obs)` after GAE and `loss(x, h, idx)` on each minibatch.
+calls `schedule(env_steps)` before each rollout, `bonus(t, h, raw, valid)` at each rollout step (`h`, the embedding
+the policy acted on), `advantages(batch, buf, next_obs)` after GAE and `loss(x, h, idx)` on each minibatch.
 """
 
 from __future__ import annotations
@@ -54,6 +56,9 @@ class NoNovelty:
     @property
     def params(self) -> list[nn.Parameter]:
         return []
+
+    def schedule(self, env_steps: int) -> None:
+        pass
 
     def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> float:
         return 0.0
@@ -108,6 +113,8 @@ class RandomDistillation:
         device: Any,
         proportion: float = 1.0,
         pool: int = 1,
+        floor: float = 1.0,
+        total_steps: int = 1,
     ):
         h, w = obs_shape[0] // pool, obs_shape[1] // pool
         if min(h, w) < 10:
@@ -117,6 +124,8 @@ class RandomDistillation:
                 "(at least 10×10 after pooling)"
             )
         self.coef, self.device, self.proportion, self.pool = coef, device, proportion, pool
+        self.floor, self.total_steps = floor, total_steps
+        self.weight = coef  # the weight at the rollout under way (:meth:`schedule`)
         # Its own random stream: the networks are drawn inside a fork of torch's, so the policy's initialisation
         # and the action sampling stay what they are without the bonus.
         with torch.random.fork_rng(devices=[]):
@@ -188,10 +197,16 @@ class RandomDistillation:
         0 on reset steps; the frame statistics and the bonus's scale are updated with the valid ones."""
         return self._scale(self._errors(self._seen(raw, valid)), valid)
 
+    def schedule(self, env_steps: int) -> None:
+        """Sets the weight of the rollout about to start, at `env_steps`: `coef` falling linearly over the step
+        budget to `floor` of itself (:func:`novelty_weight`). It follows env steps only, so a resumed run and a busy
+        host weigh the bonus as the uninterrupted run does."""
+        self.weight = novelty_weight(self.coef, self.floor, env_steps, self.total_steps)
+
     def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward;
         `raw` are the observations the step returned (`h`, the embedding the policy acted on, is the own value's)."""
-        return (self.coef * self.scaled(raw, valid)).astype(np.float32)  # as in runs before `scaled` was split out
+        return (self.weight * self.scaled(raw, valid)).astype(np.float32)  # as in runs before `scaled` was split out
 
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
         """The batch as it is: the bonus is already in the rewards its advantages come from."""
@@ -250,6 +265,8 @@ class OwnValueDistillation(RandomDistillation):
             device,
             recipe.rnd_proportion,
             recipe.rnd_pool,
+            recipe.rnd_floor,
+            recipe.total_steps,
         )
         with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
             torch.manual_seed(recipe.seed + 0x52E)
@@ -291,10 +308,10 @@ class OwnValueDistillation(RandomDistillation):
 
     @torch.no_grad()
     def advantages(self, batch: Batch, buf: Rollout, next_obs: torch.Tensor) -> Batch:
-        """The batch with ``rnd_coef`` times the bonus's advantage added to the game's: GAE over the rollout's valid
-        steps with γ 0.99 and the recipe's λ, bootstrapped from `next_obs`, not cut at episode ends (a reset step
-        carries nothing: the step that ended an episode bootstraps from the next episode's first). The bonus's
-        returns, the value head's targets, are kept for :meth:`loss`."""
+        """The batch with the weight (``rnd_coef``, less with `rnd_floor`) times the bonus's advantage added to the
+        game's: GAE over the rollout's valid steps with γ 0.99 and the recipe's λ, bootstrapped from `next_obs`, not
+        cut at episode ends (a reset step carries nothing: the step that ended an episode bootstraps from the next
+        episode's first). The bonus's returns, the value head's targets, are kept for :meth:`loss`."""
         self.settle()
         t_len, n = self.rewards.shape
         values = self.values  # the head's at each step, stored by `bonus` from the rollout's own pass
@@ -311,7 +328,7 @@ class OwnValueDistillation(RandomDistillation):
         mask = batch.mask
         own = adv.reshape(-1)[mask]
         self.returns = own + values.reshape(-1)[mask]
-        return batch._replace(advantages=batch.advantages + self.coef * own)
+        return batch._replace(advantages=batch.advantages + self.weight * own)
 
     def loss(self, x: torch.Tensor, h: torch.Tensor | None, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, float]]:
         """The predictor's loss (:meth:`RandomDistillation.loss`) plus the bonus's value loss on the minibatch's
@@ -338,5 +355,20 @@ def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: A
     if recipe.rnd_own_value:
         return OwnValueDistillation(recipe, obs_shape, agent, device)
     return RandomDistillation(
-        recipe.rnd_coef, obs_shape, recipe.num_envs, recipe.seed, device, recipe.rnd_proportion, recipe.rnd_pool
+        recipe.rnd_coef,
+        obs_shape,
+        recipe.num_envs,
+        recipe.seed,
+        device,
+        recipe.rnd_proportion,
+        recipe.rnd_pool,
+        recipe.rnd_floor,
+        recipe.total_steps,
     )
+
+
+def novelty_weight(coef: float, floor: float, env_steps: int, total_steps: int) -> float:
+    """The bonus's weight at `env_steps`: `coef` falling linearly over `total_steps` to `floor` of itself, as
+    :func:`~.ppo.entropy_coef` does the entropy's; `coef` exactly at the default floor of 1 (the runs before it)."""
+    done = min(env_steps / total_steps, 1.0)
+    return coef * (1.0 - (1.0 - floor) * done)

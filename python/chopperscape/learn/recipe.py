@@ -51,6 +51,7 @@ RECIPE_FLAGS = (
     "rnd_own_value",
     "rnd_proportion",
     "rnd_pool",
+    "rnd_floor",
 )
 
 
@@ -166,6 +167,10 @@ class Recipe:
     #: half of the bonus's time (it tells the top of the sky from the bottom, which a coarser frame still shows).
     #: 1 (the default): as it is.
     rnd_pool: int = 1
+    #: With `rnd_coef`: where the bonus's weight ends, as a fraction of `rnd_coef`: it falls linearly over the step
+    #: budget T, the weight at t being rnd_coef × (1 − (1 − rnd_floor) · min(t / T, 1)), as `ent_floor` does the
+    #: entropy's. 1 (the default) keeps it constant; 0 leaves the game's return alone to learn from at the end.
+    rnd_floor: float = 1.0
 
 
 #: The values `rnd_pool` takes: powers of two, so that each pooled pixel, a mean of bytes, is exact in float32.
@@ -183,6 +188,7 @@ LATER_SETTINGS: dict[str, Any] = {
     "rnd_own_value": False,
     "rnd_proportion": 1.0,
     "rnd_pool": 1,
+    "rnd_floor": 1.0,
 }
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -268,6 +274,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("recon_coef", r.recon_coef, 0.0, 1000.0)
     number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
     number_in("rnd_proportion", r.rnd_proportion, 0.0, 1.0, low_open=True)
+    number_in("rnd_floor", r.rnd_floor, 0.0, 1.0)
     if type(r.rnd_pool) is not int or r.rnd_pool not in RND_POOLS:  # not a bool, nor 2.0 from a JSON file
         raise ValueError(
             f"invalid value {r.rnd_pool!r} for option `rnd_pool`: allowed {', '.join(map(str, RND_POOLS))} (the side "
@@ -298,7 +305,7 @@ def check_recipe(recipe: Recipe) -> None:
                 f"invalid value {getattr(r, name)!r} for option `{name}`: {what} is for CNN recipes (pixel "
                 "observations); allowed 0 here"
             )
-    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1)):
+    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1), ("rnd_floor", 1.0)):
         if getattr(r, name) != unset and r.rnd_coef <= 0:
             raise ValueError(
                 f"invalid value {getattr(r, name)!r} for option `{name}`: it is the novelty bonus's; allowed with "

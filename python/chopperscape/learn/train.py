@@ -106,6 +106,7 @@ def train(
         while s.env_steps < end and not run.stopping(minutes):
             lr = optimizer.param_groups[0]["lr"] = learning_rate(r, s.env_steps)
             ent_coef = entropy_coef(r, s.env_steps)
+            p.novelty.schedule(s.env_steps)
 
             # --- Rollout: NEXT_STEP autoreset; the step after an episode's end is a reset step (not valid) ---------
             s.episodes.new_update()
