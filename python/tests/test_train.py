@@ -390,6 +390,8 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
+        # The preset's seed 4 by the target's protocol, cut by the twenty-fifth session's end (first rows).
+        (4, "p43-rndpool2-seed4", CANDIDATE_RNDPOOL2),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
