@@ -254,9 +254,9 @@ CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
 CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 1}
 #: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
 #: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call, seed 0 begun
-#: there and resumed in the twenty-fourth, seed 3 begun in the twenty-fourth and resumed in the twenty-fifth, seed 1 the
-#: twenty-fifth's in one call). Since the twenty-fourth session these flags are the preset's own.
-CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 102)
+#: there and resumed in the twenty-fourth, seed 3 begun in the twenty-fourth and resumed in the twenty-fifth, seeds 1
+#: and 4 the twenty-fifth's, each in one call). Since the twenty-fourth session these flags are the preset's own.
+CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 4, 102)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 
 
@@ -390,8 +390,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
-        # The preset's seed 4 by the target's protocol, cut by the twenty-fifth session's end (first rows).
-        (4, "p43-rndpool2-seed4", CANDIDATE_RNDPOOL2),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
