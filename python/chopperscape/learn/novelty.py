@@ -257,17 +257,7 @@ class OwnValueDistillation(RandomDistillation):
     own_value = True
 
     def __init__(self, recipe: Recipe, obs_shape: tuple[int, ...], agent: Any, device: Any):
-        super().__init__(
-            recipe.rnd_coef,
-            obs_shape,
-            recipe.num_envs,
-            recipe.seed,
-            device,
-            recipe.rnd_proportion,
-            recipe.rnd_pool,
-            recipe.rnd_floor,
-            recipe.total_steps,
-        )
+        super().__init__(*_settings(recipe, obs_shape, device))
         with torch.random.fork_rng(devices=[]):  # its own stream, as the networks'
             torch.manual_seed(recipe.seed + 0x52E)
             self.value_head = nn.Linear(agent.embedding_width, 1).to(device)
@@ -354,7 +344,12 @@ def novelty_of(recipe: Recipe, obs_shape: tuple[int, ...], device: Any, agent: A
         return NoNovelty()
     if recipe.rnd_own_value:
         return OwnValueDistillation(recipe, obs_shape, agent, device)
-    return RandomDistillation(
+    return RandomDistillation(*_settings(recipe, obs_shape, device))
+
+
+def _settings(recipe: Recipe, obs_shape: tuple[int, ...], device: Any) -> tuple[Any, ...]:
+    """:class:`RandomDistillation`'s arguments from `recipe`, in its order (both kinds of bonus take them)."""
+    return (
         recipe.rnd_coef,
         obs_shape,
         recipe.num_envs,
