@@ -368,6 +368,38 @@ def test_its_weight_falls_to_its_floor_over_the_schedule():
         check_recipe(Recipe(obs_type="grayscale", network="small", rnd_floor=0.5))
 
 
+def test_its_weight_holds_before_it_falls():
+    """`rnd_hold`: the weight stays at `rnd_coef` over the first share of the budget, then falls linearly over the
+    rest to its floor; the default hold of 0 is the whole budget's fall, exactly. The part and the recipe's checks
+    take it: refused outside [0, 1), and without a floor below 1 (nothing would fall) or without the bonus."""
+    from chopperscape.learn.novelty import RandomDistillation, novelty_weight
+    from chopperscape.learn.recipe import Recipe, check_recipe
+
+    held = [novelty_weight(0.5, 0.0, t, 1000, 0.5) for t in (0, 250, 500, 750, 1000, 2000)]
+    assert held == pytest.approx([0.5, 0.5, 0.5, 0.25, 0.0, 0.0])
+    assert novelty_weight(0.5, 0.2, 800, 1000, 0.6) == pytest.approx(0.5 * (1 - 0.8 * 0.5))
+    for t in range(0, 1200, 37):  # hold 0 is the earlier fall, float for float
+        assert novelty_weight(0.5, 0.3, t, 1000, 0.0) == novelty_weight(0.5, 0.3, t, 1000)
+    part = RandomDistillation(0.5, (16, 16, 2), num_envs=4, seed=3, device="cpu", floor=0.0, total_steps=1000, hold=0.5)
+    part.schedule(400)
+    assert part.weight == 0.5
+    part.schedule(900)
+    assert part.weight == pytest.approx(0.1)
+    recipe, _, own = _own(rnd_floor=0.0, rnd_hold=0.5)
+    own.schedule(recipe.total_steps * 3 // 4)
+    assert own.hold == 0.5 and own.weight == pytest.approx(0.25)
+
+    bonus = {"obs_type": "grayscale", "network": "small", "rnd_coef": 0.5}
+    for bad in (-0.1, 1.0, 2.0, float("nan"), float("inf"), True):
+        with pytest.raises(ValueError, match=r"`rnd_hold`: allowed a finite number in \[0, 1\)"):
+            check_recipe(Recipe(**bonus, rnd_floor=0.0, rnd_hold=bad))
+    with pytest.raises(ValueError, match=r"`rnd_hold`: it is where the novelty bonus's weight starts to fall"):
+        check_recipe(Recipe(**bonus, rnd_hold=0.5))
+    with pytest.raises(ValueError, match=r"`rnd_hold`: it is the novelty bonus's; allowed with rnd_coef > 0"):
+        check_recipe(Recipe(obs_type="grayscale", network="small", rnd_hold=0.5))
+    check_recipe(Recipe(**bonus, rnd_floor=0.0, rnd_hold=0.5))
+
+
 def test_a_run_with_a_falling_weight_parts_from_the_constant_one_after_its_first_update(tmp_path):
     """The loop schedules the weight before each rollout: the first update (at 0 env steps) is the constant
     weight's, row for row, the later ones are not; the recipe file keeps the floor."""

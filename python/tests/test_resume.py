@@ -96,6 +96,7 @@ def test_a_resumed_features_run_is_the_uninterrupted_run(tmp_path, monkeypatch, 
         (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_proportion": 0.5}),
         (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_pool": 2}),
         (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_floor": 0.0}),
+        (0.0, 0.0, 0.5, {"rnd_own_value": True, "rnd_floor": 0.0, "rnd_hold": 0.5}),
     ],
 )
 def test_a_resumed_pixel_run_is_the_uninterrupted_run(tmp_path, monkeypatch, aux_coef, recon_coef, rnd_coef, novelty):

@@ -21,7 +21,8 @@ head of its own on the policy's trunk, its return not cut at episode ends (γ 0.
 learns from the advantage ``A_game + rnd_coef · A_bonus`` (the paper's 2:1 is `rnd_coef` 0.5); its errors are taken
 for the whole rollout in one pass once it ends (:meth:`OwnValueDistillation.settle`). With `rnd_floor` F below 1
 the weight falls linearly over the step budget to F × `rnd_coef` (as `ent_floor` does the entropy's): a search early,
-the game's return alone to learn from late. Training only: neither network nor the bonus's value head is part of the
+the game's return alone to learn from late; with `rnd_hold` H it holds at `rnd_coef` over the first H of the budget
+and falls over the rest. Training only: neither network nor the bonus's value head is part of the
 policy, the saved model or its export.
 
 :func:`novelty_of` gives the part for a recipe: :class:`NoNovelty` (nothing, no state) when the weight is 0. The loop
@@ -115,6 +116,7 @@ class RandomDistillation:
         pool: int = 1,
         floor: float = 1.0,
         total_steps: int = 1,
+        hold: float = 0.0,
     ):
         h, w = obs_shape[0] // pool, obs_shape[1] // pool
         if min(h, w) < 10:
@@ -124,7 +126,7 @@ class RandomDistillation:
                 "(at least 10×10 after pooling)"
             )
         self.coef, self.device, self.proportion, self.pool = coef, device, proportion, pool
-        self.floor, self.total_steps = floor, total_steps
+        self.floor, self.total_steps, self.hold = floor, total_steps, hold
         self.weight = coef  # the weight at the rollout under way (:meth:`schedule`)
         # Its own random stream: the networks are drawn inside a fork of torch's, so the policy's initialisation
         # and the action sampling stay what they are without the bonus.
@@ -198,10 +200,10 @@ class RandomDistillation:
         return self._scale(self._errors(self._seen(raw, valid)), valid)
 
     def schedule(self, env_steps: int) -> None:
-        """Sets the weight of the rollout about to start, at `env_steps`: `coef` falling linearly over the step
-        budget to `floor` of itself (:func:`novelty_weight`). It follows env steps only, so a resumed run and a busy
-        host weigh the bonus as the uninterrupted run does."""
-        self.weight = novelty_weight(self.coef, self.floor, env_steps, self.total_steps)
+        """Sets the weight of the rollout about to start, at `env_steps`: `coef` over the first `hold` of the step
+        budget, then falling linearly over the rest to `floor` of itself (:func:`novelty_weight`). It follows env
+        steps only, so a resumed run and a busy host weigh the bonus as the uninterrupted run does."""
+        self.weight = novelty_weight(self.coef, self.floor, env_steps, self.total_steps, self.hold)
 
     def bonus(self, t: int, h: torch.Tensor | None, raw: np.ndarray, valid: np.ndarray) -> np.ndarray:
         """The weighted bonus of rollout step `t`'s envs (:meth:`scaled` times the weight), added to their reward;
@@ -359,11 +361,13 @@ def _settings(recipe: Recipe, obs_shape: tuple[int, ...], device: Any) -> tuple[
         recipe.rnd_pool,
         recipe.rnd_floor,
         recipe.total_steps,
+        recipe.rnd_hold,
     )
 
 
-def novelty_weight(coef: float, floor: float, env_steps: int, total_steps: int) -> float:
-    """The bonus's weight at `env_steps`: `coef` falling linearly over `total_steps` to `floor` of itself, as
-    :func:`~.ppo.entropy_coef` does the entropy's; `coef` exactly at the default floor of 1 (the runs before it)."""
-    done = min(env_steps / total_steps, 1.0)
+def novelty_weight(coef: float, floor: float, env_steps: int, total_steps: int, hold: float = 0.0) -> float:
+    """The bonus's weight at `env_steps`: `coef` over the first `hold` of `total_steps`, then falling linearly over
+    the rest to `floor` of itself, as :func:`~.ppo.entropy_coef` does the entropy's over the whole; `coef` exactly at
+    the default floor of 1 (the runs before it), and the whole budget's fall exactly at the default hold of 0."""
+    done = min(max((env_steps / total_steps - hold) / (1.0 - hold), 0.0), 1.0)
     return coef * (1.0 - (1.0 - floor) * done)

@@ -52,6 +52,7 @@ RECIPE_FLAGS = (
     "rnd_proportion",
     "rnd_pool",
     "rnd_floor",
+    "rnd_hold",
 )
 
 
@@ -171,6 +172,11 @@ class Recipe:
     #: budget T, the weight at t being rnd_coef × (1 − (1 − rnd_floor) · min(t / T, 1)), as `ent_floor` does the
     #: entropy's. 1 (the default) keeps it constant; 0 leaves the game's return alone to learn from at the end.
     rnd_floor: float = 1.0
+    #: With `rnd_floor` below 1: the share of the step budget over which the bonus's weight holds at `rnd_coef`
+    #: before it falls, linearly over the rest to `rnd_floor` × `rnd_coef`: at t the weight is
+    #: rnd_coef × (1 − (1 − rnd_floor) · clamp((t / T − rnd_hold) / (1 − rnd_hold), 0, 1)). 0 (the default): it
+    #: falls from the start; 0.5 searches at the full weight over the first half, then lets the game's return take over.
+    rnd_hold: float = 0.0
 
 
 #: The values `rnd_pool` takes: powers of two, so that each pooled pixel, a mean of bytes, is exact in float32.
@@ -189,6 +195,7 @@ LATER_SETTINGS: dict[str, Any] = {
     "rnd_proportion": 1.0,
     "rnd_pool": 1,
     "rnd_floor": 1.0,
+    "rnd_hold": 0.0,
 }
 
 #: `--option` names the recipe sets itself, and what to use instead.
@@ -275,6 +282,15 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
     number_in("rnd_proportion", r.rnd_proportion, 0.0, 1.0, low_open=True)
     number_in("rnd_floor", r.rnd_floor, 0.0, 1.0)
+    try:
+        hold_ok = number_in("rnd_hold", r.rnd_hold, 0.0, 1.0) < 1.0
+    except ValueError:
+        hold_ok = False
+    if not hold_ok:
+        raise ValueError(
+            f"invalid value {r.rnd_hold!r} for option `rnd_hold`: allowed a finite number in [0, 1) (the share of the "
+            "step budget before the novelty bonus's weight starts to fall)"
+        )
     if type(r.rnd_pool) is not int or r.rnd_pool not in RND_POOLS:  # not a bool, nor 2.0 from a JSON file
         raise ValueError(
             f"invalid value {r.rnd_pool!r} for option `rnd_pool`: allowed {', '.join(map(str, RND_POOLS))} (the side "
@@ -305,12 +321,18 @@ def check_recipe(recipe: Recipe) -> None:
                 f"invalid value {getattr(r, name)!r} for option `{name}`: {what} is for CNN recipes (pixel "
                 "observations); allowed 0 here"
             )
-    for name, unset in (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1), ("rnd_floor", 1.0)):
+    novelty_settings = (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1), ("rnd_floor", 1.0))
+    for name, unset in (*novelty_settings, ("rnd_hold", 0.0)):
         if getattr(r, name) != unset and r.rnd_coef <= 0:
             raise ValueError(
                 f"invalid value {getattr(r, name)!r} for option `{name}`: it is the novelty bonus's; allowed with "
                 f"rnd_coef > 0 (else {unset})"
             )
+    if r.rnd_hold > 0 and r.rnd_floor >= 1.0:
+        raise ValueError(
+            f"invalid value {r.rnd_hold!r} for option `rnd_hold`: it is where the novelty bonus's weight starts to "
+            "fall; allowed with rnd_floor < 1 (else 0)"
+        )
     if r.augment != "none" and mlp:
         raise ValueError(
             f"invalid value {r.augment!r} for option `augment`: augmentation is for CNN recipes (pixel observations); "
