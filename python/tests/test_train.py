@@ -258,6 +258,10 @@ CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5
 #: and 4 the twenty-fifth's, each in one call). Since the twenty-fourth session these flags are the preset's own.
 CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 4, 102)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
+#: The twenty-sixth session's: the preset with the bonus's weight falling to nothing over the 8 M
+#: (docs/curves/pixels-candidates/rndfloor0/target.csv; seeds 3 and 102, each in one call), its seeds and its flags.
+CANDIDATE_RNDFLOOR0_SEEDS = (3, 102)
+CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
 
 
 @functools.cache
@@ -288,6 +292,7 @@ def _target_set(seed: int) -> str:
         ("pixels-candidates/ent02f05-12m", CANDIDATE_F05_SEEDS),
         ("pixels-candidates/rndown05", CANDIDATE_RNDOWN05_SEEDS),
         ("pixels-candidates/rndpool2", CANDIDATE_RNDPOOL2_SEEDS),
+        ("pixels-candidates/rndfloor0", CANDIDATE_RNDFLOOR0_SEEDS),
     ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
@@ -417,6 +422,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         *(
             (s, f"../pixels-candidates/rndpool2/{_target_set(s)}/seed-{s}", CANDIDATE_RNDPOOL2)
             for s in CANDIDATE_RNDPOOL2_SEEDS
+        ),
+        # The twenty-sixth session's: the preset with the bonus's weight falling to 0 (`-- --rnd-floor 0`), collected
+        # apart.
+        *(
+            (s, f"../pixels-candidates/rndfloor0/{_target_set(s)}/seed-{s}", CANDIDATE_RNDFLOOR0)
+            for s in CANDIDATE_RNDFLOOR0_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
