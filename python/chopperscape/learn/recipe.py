@@ -321,8 +321,13 @@ def check_recipe(recipe: Recipe) -> None:
                 f"invalid value {getattr(r, name)!r} for option `{name}`: {what} is for CNN recipes (pixel "
                 "observations); allowed 0 here"
             )
-    novelty_settings = (("rnd_own_value", False), ("rnd_proportion", 1.0), ("rnd_pool", 1), ("rnd_floor", 1.0))
-    for name, unset in (*novelty_settings, ("rnd_hold", 0.0)):
+    for name, unset in (
+        ("rnd_own_value", False),
+        ("rnd_proportion", 1.0),
+        ("rnd_pool", 1),
+        ("rnd_floor", 1.0),
+        ("rnd_hold", 0.0),
+    ):
         if getattr(r, name) != unset and r.rnd_coef <= 0:
             raise ValueError(
                 f"invalid value {getattr(r, name)!r} for option `{name}`: it is the novelty bonus's; allowed with "
