@@ -397,6 +397,9 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
+        # The twenty-sixth session's bonus holding over the first half, then falling to 0 (`target43.sh 102 RUNS 110
+        # -- --rnd-floor 0 --rnd-hold 0.5`, alone on both cores), cut by the session's end.
+        (102, "p43-rndhold05-seed102", {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
