@@ -32,12 +32,16 @@ def int_in(name: str, value: Any, low: int, high: int) -> int:
     return int(value)
 
 
-def number_in(name: str, value: Any, low: float, high: float, *, low_open: bool = False) -> float:
-    """`value` as a finite `float` in `[low, high]` (`(low, high]` with `low_open`); NaN and infinities never."""
+def number_in(
+    name: str, value: Any, low: float, high: float, *, low_open: bool = False, high_open: bool = False
+) -> float:
+    """`value` as a finite `float` in `[low, high]` (`(low, …` with `low_open`, `…, high)` with `high_open`); NaN and
+    infinities never."""
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
-    ok = ok and math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
+    ok = ok and math.isfinite(value) and (value > low if low_open else value >= low)
+    ok = ok and (value < high if high_open else value <= high)
     if not ok:
-        interval = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+        interval = f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
         raise ValueError(f"invalid value {value!r} for option `{name}`: allowed a finite number in {interval}")
     return float(value)
 

@@ -282,15 +282,7 @@ def check_recipe(recipe: Recipe) -> None:
     number_in("rnd_coef", r.rnd_coef, 0.0, 1000.0)
     number_in("rnd_proportion", r.rnd_proportion, 0.0, 1.0, low_open=True)
     number_in("rnd_floor", r.rnd_floor, 0.0, 1.0)
-    try:
-        hold_ok = number_in("rnd_hold", r.rnd_hold, 0.0, 1.0) < 1.0
-    except ValueError:
-        hold_ok = False
-    if not hold_ok:
-        raise ValueError(
-            f"invalid value {r.rnd_hold!r} for option `rnd_hold`: allowed a finite number in [0, 1) (the share of the "
-            "step budget before the novelty bonus's weight starts to fall)"
-        )
+    number_in("rnd_hold", r.rnd_hold, 0.0, 1.0, high_open=True)
     if type(r.rnd_pool) is not int or r.rnd_pool not in RND_POOLS:  # not a bool, nor 2.0 from a JSON file
         raise ValueError(
             f"invalid value {r.rnd_pool!r} for option `rnd_pool`: allowed {', '.join(map(str, RND_POOLS))} (the side "
