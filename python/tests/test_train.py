@@ -262,6 +262,11 @@ CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 #: (docs/curves/pixels-candidates/rndfloor0/target.csv; seeds 3 and 102, each in one call), its seeds and its flags.
 CANDIDATE_RNDFLOOR0_SEEDS = (3, 102)
 CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
+#: The twenty-sixth session's: the weight held over the first half, then falling to nothing
+#: (docs/curves/pixels-candidates/rndhold05/target.csv; seed 102 begun in the twenty-sixth session and resumed in the
+#: twenty-seventh, seed 3 the twenty-seventh's in one call), its seeds and its flags.
+CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
+CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
 
 
 @functools.cache
@@ -293,6 +298,7 @@ def _target_set(seed: int) -> str:
         ("pixels-candidates/rndown05", CANDIDATE_RNDOWN05_SEEDS),
         ("pixels-candidates/rndpool2", CANDIDATE_RNDPOOL2_SEEDS),
         ("pixels-candidates/rndfloor0", CANDIDATE_RNDFLOOR0_SEEDS),
+        ("pixels-candidates/rndhold05", CANDIDATE_RNDHOLD05_SEEDS),
     ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
@@ -395,11 +401,10 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
+        # The preset's never-tuned seed 100 by the target's protocol, cut by the twenty-seventh session's end.
+        (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
-        # The twenty-sixth session's bonus holding over the first half, then falling to 0 (`target43.sh 102 RUNS 110
-        # -- --rnd-floor 0 --rnd-hold 0.5`, alone on both cores), cut by the session's end.
-        (102, "p43-rndhold05-seed102", {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2}),
         # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
@@ -431,6 +436,12 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         *(
             (s, f"../pixels-candidates/rndfloor0/{_target_set(s)}/seed-{s}", CANDIDATE_RNDFLOOR0)
             for s in CANDIDATE_RNDFLOOR0_SEEDS
+        ),
+        # The twenty-sixth session's: the weight held over the first half, then falling to 0 (`-- --rnd-floor 0
+        # --rnd-hold 0.5`), collected apart.
+        *(
+            (s, f"../pixels-candidates/rndhold05/{_target_set(s)}/seed-{s}", CANDIDATE_RNDHOLD05)
+            for s in CANDIDATE_RNDHOLD05_SEEDS
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
