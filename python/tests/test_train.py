@@ -267,6 +267,17 @@ CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
 #: twenty-seventh, seed 3 the twenty-seventh's in one call), its seeds and its flags.
 CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
 CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
+#: Every candidate collected apart (`collect_target.py RUNS --out docs/curves/pixels-candidates/NAME`, by the target's
+#: protocol, `target43.sh SEED RUNS -- FLAGS`): its folder's NAME, its seeds run so far and its flags. Both tests
+#: below read it, so a candidate's folder, seeds and recipe are named once.
+CANDIDATES = (
+    ("ent02-12m", CANDIDATE_SEEDS, CANDIDATE_ENT02_12M),
+    ("ent02f05-12m", CANDIDATE_F05_SEEDS, CANDIDATE_ENT02F05_12M),
+    ("rndown05", CANDIDATE_RNDOWN05_SEEDS, CANDIDATE_RNDOWN05),
+    ("rndpool2", CANDIDATE_RNDPOOL2_SEEDS, CANDIDATE_RNDPOOL2),
+    ("rndfloor0", CANDIDATE_RNDFLOOR0_SEEDS, CANDIDATE_RNDFLOOR0),
+    ("rndhold05", CANDIDATE_RNDHOLD05_SEEDS, CANDIDATE_RNDHOLD05),
+)
 
 
 @functools.cache
@@ -293,12 +304,7 @@ def _target_set(seed: int) -> str:
     "folder, seeds",
     [
         ("pixels-seeds", TARGET_SEEDS),
-        ("pixels-candidates/ent02-12m", CANDIDATE_SEEDS),
-        ("pixels-candidates/ent02f05-12m", CANDIDATE_F05_SEEDS),
-        ("pixels-candidates/rndown05", CANDIDATE_RNDOWN05_SEEDS),
-        ("pixels-candidates/rndpool2", CANDIDATE_RNDPOOL2_SEEDS),
-        ("pixels-candidates/rndfloor0", CANDIDATE_RNDFLOOR0_SEEDS),
-        ("pixels-candidates/rndhold05", CANDIDATE_RNDHOLD05_SEEDS),
+        *((f"pixels-candidates/{name}", seeds) for name, seeds, _ in CANDIDATES),
     ],
 )
 def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
@@ -407,41 +413,11 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
         (102, "p43-zen3-seed102", {**BEFORE_NOVELTY, "torch_compile": True, "torch_threads": 2}),
-        # The sixteenth session's candidate, entropy 0.02 on the 12 M schedule, by the target's protocol
-        # (`target43.sh SEED RUNS -- --steps 12000000 --ent-coef 0.02`, alone on both cores), collected apart.
+        # The candidates' seeds by the target's protocol, each collected apart (CANDIDATES).
         *(
-            (s, f"../pixels-candidates/ent02-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02_12M)
-            for s in CANDIDATE_SEEDS
-        ),
-        # The seventeenth session's: that entropy falling to half of itself over the schedule (`-- --steps 12000000
-        # --ent-coef 0.02 --ent-floor 0.5`), by the same protocol, collected apart.
-        *(
-            (s, f"../pixels-candidates/ent02f05-12m/{_target_set(s)}/seed-{s}", CANDIDATE_ENT02F05_12M)
-            for s in CANDIDATE_F05_SEEDS
-        ),
-        # The nineteenth session's: RND 0.5 with its own value head on the 8 M schedule (`-- --rnd-coef 0.5
-        # --rnd-own-value`), by the same protocol, collected apart.
-        *(
-            (s, f"../pixels-candidates/rndown05/{_target_set(s)}/seed-{s}", CANDIDATE_RNDOWN05)
-            for s in CANDIDATE_RNDOWN05_SEEDS
-        ),
-        # The twenty-third session's: that bonus on frames pooled 2×2 (`-- --rnd-coef 0.5 --rnd-own-value --rnd-pool
-        # 2`), collected apart.
-        *(
-            (s, f"../pixels-candidates/rndpool2/{_target_set(s)}/seed-{s}", CANDIDATE_RNDPOOL2)
-            for s in CANDIDATE_RNDPOOL2_SEEDS
-        ),
-        # The twenty-sixth session's: the preset with the bonus's weight falling to 0 (`-- --rnd-floor 0`), collected
-        # apart.
-        *(
-            (s, f"../pixels-candidates/rndfloor0/{_target_set(s)}/seed-{s}", CANDIDATE_RNDFLOOR0)
-            for s in CANDIDATE_RNDFLOOR0_SEEDS
-        ),
-        # The twenty-sixth session's: the weight held over the first half, then falling to 0 (`-- --rnd-floor 0
-        # --rnd-hold 0.5`), collected apart.
-        *(
-            (s, f"../pixels-candidates/rndhold05/{_target_set(s)}/seed-{s}", CANDIDATE_RNDHOLD05)
-            for s in CANDIDATE_RNDHOLD05_SEEDS
+            (s, f"../pixels-candidates/{name}/{_target_set(s)}/seed-{s}", flags)
+            for name, seeds, flags in CANDIDATES
+            for s in seeds
         ),
         # The ninth to eleventh sessions' target runs, of the preset before its value loss doubled.
         *(
