@@ -255,8 +255,9 @@ CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5
 #: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
 #: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call, seed 0 begun
 #: there and resumed in the twenty-fourth, seed 3 begun in the twenty-fourth and resumed in the twenty-fifth, seeds 1
-#: and 4 the twenty-fifth's, each in one call). Since the twenty-fourth session these flags are the preset's own.
-CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 4, 102)
+#: and 4 the twenty-fifth's, each in one call; 100, 101, 103 and 104 the twenty-eighth's, each in one call on a Zen 5
+#: EPYC). Since the twenty-fourth session these flags are the preset's own.
+CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 #: The twenty-sixth session's: the preset with the bonus's weight falling to nothing over the 8 M
 #: (docs/curves/pixels-candidates/rndfloor0/target.csv; seeds 3 and 102, each in one call), its seeds and its flags.
@@ -407,7 +408,9 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # RND with its own value at a quarter share: the eighteenth session's 18 minutes, then the twentieth's run by
         # the target's protocol (the same first 2.08 M row for row), stopped at 4.07 M of 8 M; alone on both cores.
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
-        # The preset's never-tuned seed 100 by the target's protocol, cut by the twenty-seventh session's end.
+        # The preset's never-tuned seed 100 by the target's protocol on the Zen 3 EPYC, cut by the twenty-seventh
+        # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
+        # (another CPU, so another draw from the third update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),

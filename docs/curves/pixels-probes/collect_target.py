@@ -37,10 +37,17 @@ FIELDS = ["seed", "decisions", "wall_s", "cpu_s", "mean_return", "bird", "fuel",
 
 
 def this_machine() -> str:
-    """`N-vCPU MODEL`, with `(AVX-512)` where the CPU has it (the two machines of these sessions differ by it)."""
+    """`N-vCPU MODEL (family F model M, AVX-512)`: the hosts of these sessions all call themselves "AMD EPYC", so
+    the CPU's family and model tell them apart (family 25: Zen 3 or 4; 26: Zen 5), and AVX-512 is named where it is.
+    """
     info = Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").is_file() else ""
-    model = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("model name")), "?")
-    return f"{os.cpu_count()}-vCPU {model}" + (" (AVX-512)" if " avx512f" in info else "")
+    fields: dict[str, str] = {}
+    for line in info.splitlines():
+        key, _, value = line.partition(":")
+        fields.setdefault(key.strip(), value.strip())
+    cpu = [f"family {fields['cpu family']} model {fields['model']}"] if "cpu family" in fields else []
+    cpu += ["AVX-512"] if " avx512f" in info else []
+    return f"{os.cpu_count()}-vCPU {fields.get('model name', '?')}" + (f" ({', '.join(cpu)})" if cpu else "")
 
 
 def set_of(seed: int) -> str:
