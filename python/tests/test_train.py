@@ -410,7 +410,7 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         (102, "p43-rndown25-seed102", {**CANDIDATE_RNDOWN05, "rnd_proportion": 0.25}),
         # The preset's never-tuned seed 100 by the target's protocol on the Zen 3 EPYC, cut by the twenty-seventh
         # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
-        # (another CPU, so another draw from the third update on) is the collected one.
+        # (another CPU: its float rounding parts from the first update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
         # The twenty-eighth session's preset on the 12 M schedule, seed 104 by the target's protocol on a Zen 5 EPYC.
         (104, "p43-rndpool2-12m-seed104", {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}),

@@ -46,7 +46,7 @@ def this_machine() -> str:
         key, _, value = line.partition(":")
         fields.setdefault(key.strip(), value.strip())
     cpu = [f"family {fields['cpu family']} model {fields['model']}"] if "cpu family" in fields else []
-    cpu += ["AVX-512"] if " avx512f" in info else []
+    cpu += ["AVX-512"] if "avx512f" in fields.get("flags", "").split() else []
     return f"{os.cpu_count()}-vCPU {fields.get('model name', '?')}" + (f" ({', '.join(cpu)})" if cpu else "")
 
 
