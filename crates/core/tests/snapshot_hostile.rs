@@ -276,7 +276,7 @@ fn as_version_1(bytes: &[u8]) -> Vec<u8> {
 }
 
 /// Takes a snapshot of an env of `options` played 40 steps, rewrites it in an older format (`older`), and checks
-/// that it decodes to the same options, that the restored env continues exactly as the original (stacked frames
+/// that it decodes to the same options, that it re-encodes into the current format, that the restored env continues exactly as the original (stacked frames
 /// included), and that an env where `option` has its default refuses it naming `refusal`.
 fn older_snapshot_loads_as_drawn(
     options: &[(&str, &str)],
@@ -291,6 +291,11 @@ fn older_snapshot_loads_as_drawn(
     let mut original = played(config.clone(), 40);
     let snap = Snapshot::from_bytes(&older(&original.snapshot().to_bytes())).unwrap();
     assert_eq!(snap.config(), &config);
+    // Written again, it is in the current format, and that round-trips (the fuzz target checks the same).
+    let upgraded = snap.to_bytes();
+    assert_eq!(upgraded[4..6], SNAPSHOT_VERSION.to_le_bytes());
+    assert_eq!(Snapshot::from_bytes(&upgraded).unwrap(), snap);
+    assert_eq!(Snapshot::from_bytes(&upgraded).unwrap().to_bytes(), upgraded);
     let mut restored = ChopperScape::from_snapshot(&snap).unwrap();
     for t in 0..30 {
         let (a, b) = (original.step(t % 5).unwrap(), restored.step(t % 5).unwrap());
