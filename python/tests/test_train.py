@@ -268,6 +268,11 @@ CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
 #: twenty-seventh, seed 3 the twenty-seventh's in one call), its seeds and its flags.
 CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
 CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
+#: The preset on the 12 M schedule (docs/curves/pixels-candidates/rndpool2-12m/target.csv; seed 104 the
+#: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, each in one
+#: call on a Zen 5 EPYC), its seeds run so far and its flags.
+CANDIDATE_RNDPOOL2_12M_SEEDS = (101, 104)
+CANDIDATE_RNDPOOL2_12M = {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}
 #: Every candidate collected apart (`collect_target.py RUNS --out docs/curves/pixels-candidates/NAME`, by the target's
 #: protocol, `target43.sh SEED RUNS -- FLAGS`): its folder's NAME, its seeds run so far and its flags. Both tests
 #: below read it, so a candidate's folder, seeds and recipe are named once.
@@ -278,6 +283,7 @@ CANDIDATES = (
     ("rndpool2", CANDIDATE_RNDPOOL2_SEEDS, CANDIDATE_RNDPOOL2),
     ("rndfloor0", CANDIDATE_RNDFLOOR0_SEEDS, CANDIDATE_RNDFLOOR0),
     ("rndhold05", CANDIDATE_RNDHOLD05_SEEDS, CANDIDATE_RNDHOLD05),
+    ("rndpool2-12m", CANDIDATE_RNDPOOL2_12M_SEEDS, CANDIDATE_RNDPOOL2_12M),
 )
 
 
@@ -412,8 +418,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
         # (another CPU: its float rounding parts from the first update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
-        # The twenty-eighth session's preset on the 12 M schedule, seed 104 by the target's protocol on a Zen 5 EPYC.
-        (104, "p43-rndpool2-12m-seed104", {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
