@@ -276,8 +276,8 @@ fn as_version_1(bytes: &[u8]) -> Vec<u8> {
 }
 
 /// Takes a snapshot of an env of `options` played 40 steps, rewrites it in an older format (`older`), and checks
-/// that it decodes to the same options, that it re-encodes into the current format, that the restored env continues exactly as the original (stacked frames
-/// included), and that an env where `option` has its default refuses it naming `refusal`.
+/// that it decodes to the same options, that it re-encodes into the current format, that the restored env
+/// continues exactly as the original (stacked frames included), and that an env where `option` has its default refuses it naming `refusal`.
 fn older_snapshot_loads_as_drawn(
     options: &[(&str, &str)],
     older: fn(&[u8]) -> Vec<u8>,
@@ -294,8 +294,9 @@ fn older_snapshot_loads_as_drawn(
     // Written again, it is in the current format, and that round-trips (the fuzz target checks the same).
     let upgraded = snap.to_bytes();
     assert_eq!(upgraded[4..6], SNAPSHOT_VERSION.to_le_bytes());
-    assert_eq!(Snapshot::from_bytes(&upgraded).unwrap(), snap);
-    assert_eq!(Snapshot::from_bytes(&upgraded).unwrap().to_bytes(), upgraded);
+    let again = Snapshot::from_bytes(&upgraded).unwrap();
+    assert_eq!(again, snap);
+    assert_eq!(again.to_bytes(), upgraded);
     let mut restored = ChopperScape::from_snapshot(&snap).unwrap();
     for t in 0..30 {
         let (a, b) = (original.step(t % 5).unwrap(), restored.step(t % 5).unwrap());
