@@ -269,8 +269,9 @@ CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
 CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
 CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
 #: The preset on the 12 M schedule (docs/curves/pixels-candidates/rndpool2-12m/target.csv; seed 104 the
-#: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, each in one
-#: call on a Zen 5 EPYC), its seeds run so far and its flags.
+#: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, 0, 2 and
+#: 100 the thirtieth's, each in one call on a Zen 5 EPYC; seed 1 in two, resumed from its checkpoint in the
+#: thirtieth), its seeds run so far and its flags.
 CANDIDATE_RNDPOOL2_12M_SEEDS = (0, 1, 2, 3, 4, 100, 101, 104)
 CANDIDATE_RNDPOOL2_12M = {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}
 #: Every candidate collected apart (`collect_target.py RUNS --out docs/curves/pixels-candidates/NAME`, by the target's
