@@ -269,10 +269,10 @@ CANDIDATE_RNDFLOOR0 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0}
 CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
 CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
 #: The preset on the 12 M schedule (docs/curves/pixels-candidates/rndpool2-12m/target.csv; seed 104 the
-#: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, 0, 2 and
-#: 100 the thirtieth's, each in one call on a Zen 5 EPYC; seed 1 in two, resumed from its checkpoint in the
+#: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, 0, 2, 100
+#: and 102 the thirtieth's, each in one call on a Zen 5 EPYC; seed 1 in two, resumed from its checkpoint in the
 #: thirtieth), its seeds run so far and its flags.
-CANDIDATE_RNDPOOL2_12M_SEEDS = (0, 1, 2, 3, 4, 100, 101, 104)
+CANDIDATE_RNDPOOL2_12M_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 104)
 CANDIDATE_RNDPOOL2_12M = {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}
 #: Every candidate collected apart (`collect_target.py RUNS --out docs/curves/pixels-candidates/NAME`, by the target's
 #: protocol, `target43.sh SEED RUNS -- FLAGS`): its folder's NAME, its seeds run so far and its flags. Both tests
@@ -419,9 +419,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
         # (another CPU: its float rounding parts from the first update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
-        # The 12 M candidate's seed 102 on the Zen 5 EPYC, cut by the thirtieth session's end (its checkpoint in
-        # runs/s30/rndpool2-12m/seed-102/ on that host only; collected into the candidate once it ends).
-        (102, "p43-rndpool2-12m-seed102", CANDIDATE_RNDPOOL2_12M),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
