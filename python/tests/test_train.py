@@ -419,6 +419,9 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
         # (another CPU: its float rounding parts from the first update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
+        # The 12 M candidate's seed 103 on the Zen 5 EPYC, cut by the thirtieth session's end (its checkpoint in
+        # runs/s30/rndpool2-12m/seed-103/ on that host only; collected into the candidate once it ends).
+        (103, "p43-rndpool2-12m-seed103", CANDIDATE_RNDPOOL2_12M),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
