@@ -347,7 +347,8 @@ TRAINED_ROWS = {
     "sb3-ppo": ["-m", "chopperscape.integrations.sb3_train", "ppo"],
     "sb3-dqn": ["-m", "chopperscape.integrations.sb3_train", "dqn"],
     "rllib-ppo": ["-m", "chopperscape.integrations.rllib.ppo"],
-    "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels", "--mode"],
+    # The pixel preset at its stated budget, with the target protocol's speed flags (compiled, two threads).
+    "pixels": ["-m", "chopperscape.learn.train", "--preset", "pixels", "--torch-compile", "--torch-threads", "2"],
     # The preset until the ninth session, which the first pixel rows ran (today's preset with these flags).
     "pixels-p3": ["-m", "chopperscape.learn.train", "--preset", "pixels", "--network", "small", "--update-epochs", "2"],
 }

@@ -214,9 +214,13 @@ def test_pixel_recipe_smoke_trains_reloads_and_evaluates(tmp_path, capsys):
         assert torch.equal(agent.actor(torch.from_numpy(env_obs)), again.actor(torch.from_numpy(env_obs)))
 
 
+#: The preset's schedule from the ninth session to the thirtieth (12 M since): what a run of those sessions adds to
+#: today's preset's flags.
+EIGHT_M = {"total_steps": 8_000_000}
 #: What a run of the preset before the twenty-fourth session adds to the preset's flags: no novelty bonus (the
-#: preset's `NOVELTY` since). The flags below are those that give each run's recipe on today's preset.
-BEFORE_NOVELTY = {k: LATER_SETTINGS[k] for k in NOVELTY}
+#: preset's `NOVELTY` since) and the 8 M schedule. The flags below are those that give each run's recipe on today's
+#: preset.
+BEFORE_NOVELTY = {**{k: LATER_SETTINGS[k] for k in NOVELTY}, **EIGHT_M}
 #: The earlier pixel preset (until the ninth session): the plain small CNN, 2 epochs of 4 minibatches at 1e-3 over
 #: 10 M decisions (docs/learning.md gives its flags).
 EARLIER_PIXELS = {
@@ -251,12 +255,19 @@ CANDIDATE_ENT02F05_12M = {**CANDIDATE_ENT02_12M, "ent_floor": 0.5}
 #: rndown05/target.csv; seed 102 begun in the seventeenth session and resumed, seed 0 the twentieth's and seed 2 the
 #: twenty-first's, seed 103 the twenty-second's, each in one call), its seeds run so far and its flags.
 CANDIDATE_RNDOWN05_SEEDS = (0, 2, 102, 103)
-CANDIDATE_RNDOWN05 = {"torch_compile": True, "torch_threads": 2, "rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 1}
+CANDIDATE_RNDOWN05 = {
+    "torch_compile": True,
+    "torch_threads": 2,
+    "rnd_coef": 0.5,
+    "rnd_own_value": True,
+    "rnd_pool": 1,
+    **EIGHT_M,
+}
 #: The twenty-third session's: the same bonus on frames pooled 2×2 (docs/curves/pixels-candidates/rndpool2/target.csv;
 #: seed 102 the twenty-second session's probe resumed to the end, seed 2 the twenty-third's in one call, seed 0 begun
 #: there and resumed in the twenty-fourth, seed 3 begun in the twenty-fourth and resumed in the twenty-fifth, seeds 1
 #: and 4 the twenty-fifth's, each in one call; 100, 101, 103 and 104 the twenty-eighth's, each in one call on a Zen 5
-#: EPYC). Since the twenty-fourth session these flags are the preset's own.
+#: EPYC). From the twenty-fourth session to the thirtieth these flags were the preset's own.
 CANDIDATE_RNDPOOL2_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 CANDIDATE_RNDPOOL2 = {**CANDIDATE_RNDOWN05, "rnd_pool": 2}
 #: The twenty-sixth session's: the preset with the bonus's weight falling to nothing over the 8 M
@@ -270,9 +281,9 @@ CANDIDATE_RNDHOLD05_SEEDS = (3, 102)
 CANDIDATE_RNDHOLD05 = {**CANDIDATE_RNDPOOL2, "rnd_floor": 0.0, "rnd_hold": 0.5}
 #: The preset on the 12 M schedule (docs/curves/pixels-candidates/rndpool2-12m/target.csv; seed 104 the
 #: twenty-eighth session's probe, collected in the twenty-ninth, seeds 101, 3 and 4 the twenty-ninth's, 0, 2, 100
-#: and 102 the thirtieth's, each in one call on a Zen 5 EPYC; seed 1 in two, resumed from its checkpoint in the
-#: thirtieth), its seeds run so far and its flags.
-CANDIDATE_RNDPOOL2_12M_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 104)
+#: and 102 the thirtieth's, each in one call on a Zen 5 EPYC; seeds 1 and 103 in two, resumed from their checkpoints
+#: in the thirtieth and thirty-first), its seeds and its flags: since the thirty-first session `--preset pixels`.
+CANDIDATE_RNDPOOL2_12M_SEEDS = (0, 1, 2, 3, 4, 100, 101, 102, 103, 104)
 CANDIDATE_RNDPOOL2_12M = {**CANDIDATE_RNDPOOL2, "total_steps": 12_000_000}
 #: Every candidate collected apart (`collect_target.py RUNS --out docs/curves/pixels-candidates/NAME`, by the target's
 #: protocol, `target43.sh SEED RUNS -- FLAGS`): its folder's NAME, its seeds run so far and its flags. Both tests
@@ -341,7 +352,7 @@ def test_the_targets_collected_seeds_are_the_ones_checked_here(folder, seeds):
 def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path, monkeypatch):
     """`collect_target.py RUNS --out FOLDER` gathers a candidate's seeds into FOLDER, not the preset's
     pixels-seeds/: each seed's files, its table line, and a summary that states the seeds' own schedule (12 M
-    here, the preset's is 8 M), with the preset's baselines copied rather than played again; seeds of two
+    here, 8 M in pixels-seeds/), with the preset's baselines copied rather than played again; seeds of two
     schedules in one set are refused by name, and pixels-seeds/ is left as it was."""
     import pathlib
     import shutil
@@ -372,7 +383,7 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
             curves / "pixels-seeds" / "100-104" / f"baseline-{name}.json"
         ).read_bytes()
     assert (out / "target.csv").read_text().splitlines()[1].endswith(",test")
-    # Seed 101 of the preset (8 M) joins the same set: its summary would mix two schedules.
+    # Seed 101 of the preset as it was (8 M) joins the same set: its summary would mix two schedules.
     line101 = (curves / "pixels-seeds" / "target.csv").read_text().splitlines()
     row101 = next(r for r in line101 if r.startswith("101,"))
     with open(runs / "target.csv", "a") as f:
@@ -419,9 +430,6 @@ def test_a_candidates_seeds_are_collected_apart_with_their_own_schedule(tmp_path
         # session's end; its checkpoint was lost with that machine, and the twenty-eighth session's run of the seed
         # (another CPU: its float rounding parts from the first update on) is the collected one.
         (100, "p43-rndpool2-seed100", CANDIDATE_RNDPOOL2),
-        # The 12 M candidate's seed 103 on the Zen 5 EPYC, cut by the thirtieth session's end (its checkpoint in
-        # runs/s30/rndpool2-12m/seed-103/ on that host only; collected into the candidate once it ends).
-        (103, "p43-rndpool2-12m-seed103", CANDIDATE_RNDPOOL2_12M),
         # The twenty-third session's bonus on frames pooled 4×4 (to 2.39 M of 8 M, alone on both cores).
         (102, "p43-rndpool4-seed102", {**CANDIDATE_RNDOWN05, "rnd_pool": 4}),
         # The eighteenth session's preset on seed 102 on the Zen 3 machine (`target43.sh 102 RUNS 45`, cut at 6.33 M).
@@ -465,18 +473,23 @@ def test_the_pixel_preset_is_the_recipe_the_targets_ran(seed, name, flags):
     assert (ran["teacher"], ran["aux_coef"], ran["recon_coef"]) == ("", 0.0, 0.0)
 
 
-def test_the_pixel_preset_is_the_pooled_novelty_candidate():
-    """Since the twenty-fourth session `--preset pixels` is the candidate its target seeds ran as flags (RND 0.5 with
-    its own value head on frames pooled 2×2): those flags add nothing to the preset but the speed settings, so the
-    seeds run with them and those run with the preset alone have one recipe."""
+def test_the_pixel_preset_is_the_pooled_novelty_candidate_on_12m():
+    """Since the thirty-first session `--preset pixels` is the candidate its target seeds ran as flags (RND 0.5 with
+    its own value head on frames pooled 2×2, over 12 M decisions): those flags add nothing to the preset but the speed
+    settings, so the seeds run with them and those run with the preset alone have one recipe. The same bonus on 8 M
+    (the preset from the twenty-fourth session to the thirtieth) differs from it in the schedule alone."""
     import dataclasses
 
     from chopperscape.learn.recipe import PRESETS, Recipe
 
     speed = {"torch_compile": True, "torch_threads": 2}
-    assert dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **CANDIDATE_RNDPOOL2})) == dataclasses.asdict(
+    assert dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **CANDIDATE_RNDPOOL2_12M})) == dataclasses.asdict(
         Recipe(**{**PRESETS["pixels"], **speed})
     )
+    assert PRESETS["pixels"]["total_steps"] == 12_000_000
+    eight = dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **CANDIDATE_RNDPOOL2}))
+    twelve = dataclasses.asdict(Recipe(**{**PRESETS["pixels"], **speed}))
+    assert {k for k in eight if eight[k] != twelve[k]} == {"total_steps"}
     assert {k: PRESETS["pixels"][k] for k in NOVELTY} == {"rnd_coef": 0.5, "rnd_own_value": True, "rnd_pool": 2}
     # The GPU preset keeps what it was measured with: no bonus.
     assert Recipe(**PRESETS["pixels-large"]).rnd_coef == 0.0

@@ -13,8 +13,9 @@ from typing import Any
 #: count decisions: a decision is 4 frames); γ = 0.998 per decision is the features recipe's 0.9995 per frame
 #: (0.9995⁴ ≈ 0.998), GAE λ 0.98, entropy 0.01, and 64 envs × 128 steps in 1 epoch of 16 minibatches at a
 #: learning rate of 2e-3 with the value loss at weight 1.0 (twice the default's 0.5; since the twelfth session),
-#: over an 8 M decision schedule (an hour of the 2-core machine with ``--torch-compile --torch-threads 2``, the
-#: speed settings, which the preset leaves to the flags), on ``small-coord-deep-stem``: the small CNN reading each
+#: over a 12 M decision schedule (since the thirty-first session, 8 M before it; 36–43 minutes a seed alone on 2
+#: cores of a Zen 5 EPYC with ``--torch-compile --torch-threads 2``, the speed settings, which the preset leaves to
+#: the flags; about 100 on a Zen 3 EPYC), on ``small-coord-deep-stem``: the small CNN reading each
 #: frame as three grey bands (the stem), with CoordConv's coordinates and a second dense layer
 #: (:mod:`chopperscape.learn.networks`). Chosen by issue 43's probes
 #: (docs/notes/pixels-speed-and-probes.md); until the ninth session the preset was the teacher-free probes' p3 (the
@@ -23,6 +24,8 @@ from typing import Any
 #: reproduce. 84×84 with λ 0.95 did not train from frames alone here. Since the twenty-fourth session it also
 #: explores by Random Network Distillation (:mod:`chopperscape.learn.novelty`; :data:`NOVELTY`): without it, one
 #: seed in five stalled low in the sky and stayed there (seeds 2 and 102 of issue 43's target, 3,838 and 2,407).
+#: The 12 M schedule met issue 43's target where 8 M did not (docs/curves/pixels-candidates/rndpool2-12m/: training
+#: seeds 0–4 IQM 7,639, never tuned on 100–104 IQM 7,357; 8 M: 6,411 and 6,686; every seed above 4,000).
 #: ``pixels-teacher`` is the earlier 84×84 recipe that `models/ppo-pixels-teacher.pt` was trained with beside a
 #: features teacher (`--teacher`), the faster, privileged route.
 #: What the two pixel presets share: a small CNN on grayscale frames, 4 stacked at frame skip 4, γ 0.998 a decision.
@@ -53,7 +56,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "gae_lambda": 0.98,
         "learning_rate": 2e-3,
         "vf_coef": 1.0,
-        "total_steps": 8_000_000,
+        "total_steps": 12_000_000,
         **NOVELTY,
     },
     "pixels-teacher": {

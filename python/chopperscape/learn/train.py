@@ -27,8 +27,8 @@ checked before anything is written; a loss that is not finite stops the run befo
 model is never a NaN one. Ctrl-C (SIGINT, SIGTERM, SIGHUP) stops the run after the current update, saves the model
 reached so far atomically, and exits with 130, 143, 129.
 Several seeds, each evaluated and all summarised as the field does: ``python -m chopperscape.learn.seeds``.
-``--preset pixels --torch-compile --torch-threads 2`` learns from the frames alone (the 42×42 agent view; 8 M
-decisions, an hour of two cores); ``--preset pixels-teacher --teacher models/ppo-features-fs4.pt`` is the
+``--preset pixels --torch-compile --torch-threads 2`` learns from the frames alone (the 42×42 agent view; 12 M
+decisions, 36–43 minutes of two Zen 5 cores); ``--preset pixels-teacher --teacher models/ppo-features-fs4.pt`` is the
 privileged route (see :class:`chopperscape.learn.recipe.Recipe`, ``teacher``, and ``docs/learning.md``).
 """
 
