@@ -4,7 +4,8 @@
 # minibatches at lr 2e-3, since the twelfth session the value loss at weight 1.0; with torch.compile, on both cores;
 # the fifth session's `small-coord` candidate until the eighth) trained ALONE on the 2-core machine for its
 # schedule (8 M decisions until the thirtieth session, 12 M since: 36-43 minutes alone on a 2-vCPU Zen 5 EPYC at
-# about 5,000 decisions a second, about 100 on a Zen 3 one; `-- --steps 8000000` gives the old one), started in RUNS/seed-SEED or
+# about 5,000 decisions a second, about 100 on a Zen 3 one; `-- --steps 8000000` gives the old one), started in
+# RUNS/seed-SEED or
 # resumed from its checkpoint there; then the held-out evaluation (100 greedy episodes from seed 1,000,000, v0 rules
 # at frame skip 4) of the model it has so far, written to RUNS/seed-SEED/eval-DECISIONS.json, and one line appended to
 # RUNS/target.csv: seed, decisions, wall and CPU seconds of this call's training, the held-out mean, and how the
